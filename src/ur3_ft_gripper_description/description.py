@@ -1,0 +1,286 @@
+"""Expand xacro into a checked URDF, with one-line errors for bad input.
+
+This is the engine behind `expand_description` (a drop-in for the xacro
+command) and the launch files. It runs the real xacro on the real upstream
+files and then:
+
+* removes the extra ``<prefix>base_link`` and its joint that the jr-robotics
+  Noetic fork of the 2F-140 macro emits (they collide with the arm's root);
+* refuses to return a model that is not one tree (duplicate names, dangling
+  joints, several roots), so that ``robot_description`` is never half-built.
+"""
+
+import os
+import re
+import xml.dom.minidom
+
+import yaml
+
+# Package -> how a user gets it; used in "package not found" errors.
+PACKAGE_SOURCES = {
+    'ur_description': 'sudo apt install ros-noetic-ur-description, or clone '
+                      'ros-industrial/universal_robot (see ur3_ft_gripper_description.repos)',
+    'robotiq_ft_sensor': 'clone ros-industrial/robotiq or jr-robotics/robotiq into your '
+                         'catkin workspace (see ur3_ft_gripper_description.repos)',
+    'robotiq_2f_140_gripper_visualization': 'clone ros-industrial/robotiq or jr-robotics/robotiq '
+                                            'into your catkin workspace '
+                                            '(see ur3_ft_gripper_description.repos)',
+}
+MODEL_PACKAGES = ('ur_description', 'robotiq_ft_sensor', 'robotiq_2f_140_gripper_visualization')
+
+# The gripper link that both robotiq layouts create; the fork's extra root sits above it.
+GRIPPER_BASE = 'robotiq_arg2f_base_link'
+
+# Top-level xacro args that name UR parameter files, with the keys the UR
+# macro reads from each (ur_description/urdf/inc/ur_common.xacro).
+UR_JOINTS = ('shoulder_pan', 'shoulder_lift', 'elbow_joint', 'wrist_1', 'wrist_2', 'wrist_3')
+UR_KINEMATIC_SEGMENTS = ('shoulder', 'upper_arm', 'forearm', 'wrist_1', 'wrist_2', 'wrist_3')
+PARAMETER_FILE_ARGS = {
+    'joint_limit_params': ('joint_limits', UR_JOINTS),
+    'kinematics_params': ('kinematics', UR_KINEMATIC_SEGMENTS),
+    'physical_params': ('dh_parameters', ()),
+    'visual_params': ('mesh_files', ()),
+}
+
+
+# A TF frame name: segments of letters, digits and '_', separated by '/'.
+FRAME_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$')
+
+
+class _ParameterFileLoader(yaml.SafeLoader):
+    """YAML as xacro.load_yaml reads it: ur_description's limits use !degrees."""
+
+
+_ParameterFileLoader.add_constructor(
+    '!degrees', lambda loader, node: float(loader.construct_scalar(node)) * 3.141592653589793 / 180.0)
+_ParameterFileLoader.add_constructor(
+    '!radians', lambda loader, node: float(loader.construct_scalar(node)))
+
+
+class DescriptionError(Exception):
+    """Bad input or environment; the message is one line naming problem and fix."""
+
+
+def check_prefix(prefix):
+    """A prefix must turn every link name into a valid TF frame name."""
+    if prefix and not FRAME_NAME.match(prefix + 'base_link'):
+        raise DescriptionError(
+            "prefix %r cannot start a TF frame name: use letters, digits, '_' and '/' "
+            "(not first), e.g. prefix:=left_ or prefix:=robot1/" % prefix)
+
+
+def _rospack():
+    import rospkg
+    return rospkg.RosPack()
+
+
+def package_path(name, rospack=None):
+    """Path of ROS package `name`, or DescriptionError saying how to get it."""
+    import rospkg
+    try:
+        return (rospack or _rospack()).get_path(name)
+    except rospkg.ResourceNotFound:
+        how = PACKAGE_SOURCES.get(name, 'install it or add its folder to ROS_PACKAGE_PATH')
+        raise DescriptionError(
+            "ROS package '%s' not found on ROS_PACKAGE_PATH: %s" % (name, how)) from None
+
+
+def check_model_packages():
+    """Fail early and clearly if an upstream package of the model is missing."""
+    rospack = _rospack()
+    for name in MODEL_PACKAGES:
+        package_path(name, rospack)
+    urdf_dir = os.path.join(package_path('robotiq_2f_140_gripper_visualization', rospack), 'urdf')
+    if not any(os.path.isfile(os.path.join(urdf_dir, f)) for f in
+               ('robotiq_arg2f_140_model_macro.xacro', 'robotiq_arg2f_140_macro.xacro')):
+        raise DescriptionError(
+            "no 2F-140 macro (robotiq_arg2f_140_model_macro.xacro or robotiq_arg2f_140_macro.xacro) "
+            "in %s: use the ros-industrial/robotiq or jr-robotics/robotiq package" % urdf_dir)
+
+
+def check_parameter_file(arg, path):
+    """Check one UR parameter file before xacro reads it."""
+    if arg not in PARAMETER_FILE_ARGS or path == '':
+        return
+    section, required = PARAMETER_FILE_ARGS[arg]
+    fix = 'give %s:=<path to a YAML file like ur_description/config/ur3/%s>' % (
+        arg, {'joint_limit_params': 'joint_limits.yaml',
+              'kinematics_params': 'default_kinematics.yaml',
+              'physical_params': 'physical_parameters.yaml',
+              'visual_params': 'visual_parameters.yaml'}[arg])
+    if not os.path.isfile(path):
+        raise DescriptionError('%s: file not found: %s; %s' % (arg, path, fix))
+    try:
+        with open(path) as f:
+            data = yaml.load(f, Loader=_ParameterFileLoader)
+    except yaml.YAMLError as e:
+        where = getattr(e, 'problem_mark', None)
+        line = ' (line %d)' % (where.line + 1) if where else ''
+        raise DescriptionError('%s: %s is not valid YAML%s; %s' % (arg, path, line, fix)) from None
+    if data is None:
+        raise DescriptionError('%s: %s is empty; %s' % (arg, path, fix))
+    if not isinstance(data, dict) or section not in data:
+        raise DescriptionError("%s: %s has no '%s' section; %s" % (arg, path, section, fix))
+    missing = [k for k in required if k not in (data[section] or {})]
+    if missing:
+        raise DescriptionError("%s: %s has no entry for %s in '%s'; %s" % (
+            arg, path, ', '.join(missing), section, fix))
+
+
+def _load_xacro():
+    """Import xacro, making `$(find pkg)` use ROS_PACKAGE_PATH (ROS 1)."""
+    try:
+        import xacro
+        from xacro import substitution_args
+    except ImportError:
+        raise DescriptionError(
+            'xacro is not installed: sudo apt install ros-noetic-xacro (ROS Noetic), '
+            "or pip install 'xacro>=2' into a venv made with --system-site-packages") from None
+    if not hasattr(xacro, 'load_yaml'):
+        raise DescriptionError(
+            'xacro %s is too old (no xacro.load_yaml, which ur_description needs): '
+            "install ros-noetic-xacro or pip install 'xacro>=2'" % getattr(xacro, '__version__', ''))
+    # xacro 2 from PyPI resolves $(find) through ament (ROS 2) only.
+    if hasattr(substitution_args, '_eval_find'):
+        def find(pkg):
+            return package_path(pkg)
+        substitution_args._eval_find = find
+        if hasattr(substitution_args, '_eval_dict'):
+            substitution_args._eval_dict['find'] = find
+    return xacro
+
+
+def _unwrap(exc):
+    """The DescriptionError behind a xacro exception, if any."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, DescriptionError):
+            return exc
+        seen.add(id(exc))
+        exc = getattr(exc, 'exc', None) or exc.__cause__ or exc.__context__
+    return None
+
+
+def run_xacro(xacro_file, mappings=None):
+    """Run xacro on `xacro_file`; returns the minidom document."""
+    mappings = dict(mappings or {})
+    if not os.path.isfile(xacro_file):
+        raise DescriptionError('xacro file not found: %s' % xacro_file)
+    for arg, value in mappings.items():
+        check_parameter_file(arg, value)
+    check_prefix(mappings.get('prefix', ''))
+    xacro = _load_xacro()
+    try:
+        return xacro.process_file(xacro_file, mappings=mappings)
+    except Exception as e:  # xacro raises many types; all become one line
+        inner = _unwrap(e)
+        if inner is not None:
+            raise inner from None
+        text = ' '.join(str(e).split()) or type(e).__name__
+        raise DescriptionError('xacro failed on %s: %s' % (xacro_file, text)) from None
+
+
+def _elements(robot, tag):
+    return [n for n in robot.childNodes if n.nodeType == n.ELEMENT_NODE and n.tagName == tag]
+
+
+def _link_of(joint, tag):
+    nodes = joint.getElementsByTagName(tag)
+    return nodes[0].getAttribute('link') if nodes else ''
+
+
+def remove_forked_gripper_roots(doc):
+    """Drop the jr-robotics fork's `<p>base_link` -> `<p>robotiq_arg2f_base_link` joint.
+
+    Only when the gripper base also has another parent (it is mounted on
+    something), so a stand-alone gripper keeps its root. The link goes too
+    when it is a second definition of the name or nothing else uses it.
+    Returns the names of the removed joints.
+    """
+    robot = doc.documentElement
+    joints = _elements(robot, 'joint')
+    parents_of = {}
+    for joint in joints:
+        parents_of.setdefault(_link_of(joint, 'child'), []).append(joint)
+    removed = []
+    for joint in joints:
+        parent, child = _link_of(joint, 'parent'), _link_of(joint, 'child')
+        if not child.endswith(GRIPPER_BASE):
+            continue
+        prefix = child[:-len(GRIPPER_BASE)]
+        is_fork_root = (parent == prefix + 'base_link' and
+                        joint.getAttribute('name') == '%s-%s' % (parent, child))
+        if not is_fork_root or len(parents_of[child]) < 2:
+            continue
+        robot.removeChild(joint)
+        removed.append(joint.getAttribute('name'))
+        same_name = [lk for lk in _elements(robot, 'link') if lk.getAttribute('name') == parent]
+        still_used = any(parent in (_link_of(j, 'parent'), _link_of(j, 'child'))
+                         for j in _elements(robot, 'joint'))
+        empty = [lk for lk in same_name if not any(
+            c.nodeType == c.ELEMENT_NODE for c in lk.childNodes)]
+        if empty and (len(same_name) > 1 or not still_used):
+            robot.removeChild(empty[-1])  # the fork's comes after the arm's
+    return removed
+
+
+def check_tree(doc):
+    """Raise DescriptionError unless the URDF is one tree with unique names."""
+    robot = doc.documentElement
+    links = [lk.getAttribute('name') for lk in _elements(robot, 'link')]
+    joints = _elements(robot, 'joint')
+    for kind, names in (('link', links), ('joint', [j.getAttribute('name') for j in joints])):
+        seen = set()
+        for name in names:
+            if name in seen:
+                raise DescriptionError(
+                    "the expanded model defines %s '%s' twice: give each robot its own prefix" % (
+                        kind, name))
+            seen.add(name)
+    for name in links:
+        if not FRAME_NAME.match(name):
+            raise DescriptionError(
+                "link name %r is not a valid TF frame name: use letters, digits, '_' and '/'" % name)
+    known = set(links)
+    parent_of = {}
+    for joint in joints:
+        name = joint.getAttribute('name')
+        parent, child = _link_of(joint, 'parent'), _link_of(joint, 'child')
+        for role, link in (('parent', parent), ('child', child)):
+            if link not in known:
+                raise DescriptionError(
+                    "joint '%s' names %s link '%s', which the model does not define" % (
+                        name, role, link))
+        if child in parent_of:
+            raise DescriptionError("link '%s' has two parent joints, '%s' and '%s'" % (
+                child, parent_of[child], name))
+        parent_of[child] = name
+    roots = [lk for lk in links if lk not in parent_of]
+    if len(roots) != 1:
+        raise DescriptionError('the expanded model has %d root links (%s); it must have one' % (
+            len(roots), ', '.join(roots) or 'none: the joints form a loop'))
+
+
+def expand(xacro_file, mappings=None):
+    """xacro_file + args -> checked URDF document (minidom)."""
+    doc = run_xacro(xacro_file, mappings)
+    remove_forked_gripper_roots(doc)
+    check_tree(doc)
+    return doc
+
+
+def expand_model(mappings=None, xacro_file=None):
+    """The package's own top-level model, with the upstream packages checked first."""
+    check_model_packages()
+    if xacro_file is None:
+        xacro_file = os.path.join(package_path('ur3_ft_gripper_description'),
+                                  'urdf', 'ur3_ft_gripper.xacro')
+    return expand(xacro_file, mappings)
+
+
+def to_xml(doc):
+    return doc.toprettyxml(indent='  ')
+
+
+def parse_urdf(text):
+    return xml.dom.minidom.parseString(text)
