@@ -1,0 +1,75 @@
+#!/usr/bin/env python3
+"""rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads."""
+import os
+import tempfile
+import textwrap
+import unittest
+
+import numpy as np
+import rospy
+import rostest
+import tf2_ros
+
+from ur3_ft_gripper_description import description, kinematics
+
+CHAIN = ['base_link', 'tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_ft_frame_id',
+         'robotiq_arg2f_base_link']
+PADS = ['left_inner_finger_pad', 'right_inner_finger_pad']
+TIMEOUT = rospy.Duration(30)
+
+FT300_ALONE = textwrap.dedent('''\
+    <robot name="ft300_alone" xmlns:xacro="http://wiki.ros.org/xacro">
+      <xacro:include filename="$(find robotiq_ft_sensor)/urdf/robotiq_ft300.urdf.xacro"/>
+      <link name="tool0"/>
+      <xacro:robotiq_ft300 parent="tool0" prefix=""><origin xyz="0 0 0" rpy="0 0 0"/></xacro:robotiq_ft300>
+    </robot>''')
+
+
+class TfChainTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('tf_chain_check')
+        cls.buffer = tf2_ros.Buffer()
+        cls.listener = tf2_ros.TransformListener(cls.buffer)
+
+    def lookup(self, target, source):
+        """Pose of `source` in `target` as a 4x4 matrix, from TF."""
+        msg = self.buffer.lookup_transform(target, source, rospy.Time(0), TIMEOUT)
+        return kinematics.transform_msg_matrix(msg.transform)
+
+    def test_chain_from_base_link_through_sensor_to_gripper(self):
+        for parent, child in zip(CHAIN, CHAIN[1:]):
+            self.lookup(parent, child)  # raises if the two frames are not connected
+
+    def test_both_finger_pads_are_below_the_gripper_base(self):
+        for pad in PADS:
+            pose = self.lookup('robotiq_arg2f_base_link', pad)
+            self.assertGreater(pose[2, 3], 0.1, pad + ' should be well out along the approach axis')
+
+    def test_finger_pads_are_mirror_images(self):
+        left = self.lookup('robotiq_arg2f_base_link', PADS[0])[:3, 3]
+        right = self.lookup('robotiq_arg2f_base_link', PADS[1])[:3, 3]
+        np.testing.assert_allclose(left[1], -right[1], atol=1e-6)
+        np.testing.assert_allclose(left[2], right[2], atol=1e-6)
+        self.assertGreater(abs(left[1] - right[1]), 0.1, 'at finger_joint 0 the gripper is open')
+
+    def test_tool0_to_gripper_equals_upstream_ft300_macro(self):
+        with tempfile.NamedTemporaryFile('w', suffix='.xacro', delete=False) as f:
+            f.write(FT300_ALONE)
+        try:
+            ft300 = kinematics.Model(description.to_xml(description.run_xacro(f.name)))
+        finally:
+            os.unlink(f.name)
+        expected = ft300.transform('tool0', 'robotiq_ft_frame_id')
+        np.testing.assert_allclose(self.lookup('tool0', 'robotiq_arg2f_base_link'), expected, atol=1e-6)
+
+    def test_tf_matches_the_robot_description_it_was_built_from(self):
+        model = kinematics.Model(rospy.get_param('robot_description'))
+        for frame in CHAIN[1:] + PADS:
+            np.testing.assert_allclose(self.lookup('base_link', frame),
+                                       model.transform('base_link', frame), atol=1e-6, err_msg=frame)
+
+
+if __name__ == '__main__':
+    rostest.rosrun('ur3_ft_gripper_description', 'tf_chain', TfChainTest)

@@ -1,0 +1,114 @@
+"""Bad input: one error line naming problem and fix, non-zero exit, no URDF, no traceback."""
+import os
+import subprocess
+
+import pytest
+import yaml
+
+from conftest import PACKAGE_DIR, UR_CONFIG, run_expand
+
+
+def assert_one_line_error(run, *words):
+    assert run.returncode == 1, run.stderr
+    assert run.stdout == '', 'a URDF was printed despite the error'
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1, run.stderr
+    assert lines[0].startswith('expand_description: error: ')
+    assert 'Traceback' not in run.stderr
+    for word in words:
+        assert word in lines[0], (word, lines[0])
+
+
+def kinematics_without(tmp_path, segment):
+    with open(os.path.join(UR_CONFIG, 'default_kinematics.yaml')) as f:
+        data = yaml.safe_load(f)
+    del data['kinematics'][segment]
+    path = tmp_path / ('no_%s.yaml' % segment)
+    path.write_text(yaml.safe_dump(data))
+    return str(path)
+
+
+def test_missing_parameter_file():
+    run = run_expand('kinematics_params:=/nonexistent/my_calibration.yaml')
+    assert_one_line_error(run, 'kinematics_params', 'file not found', '/nonexistent/my_calibration.yaml')
+
+
+def test_empty_parameter_file(tmp_path):
+    (tmp_path / 'empty.yaml').write_text('')
+    assert_one_line_error(run_expand('joint_limit_params:=%s' % (tmp_path / 'empty.yaml')),
+                          'joint_limit_params', 'is empty')
+
+
+def test_malformed_parameter_file(tmp_path):
+    (tmp_path / 'broken.yaml').write_text('kinematics: [shoulder: {x: 0\n')
+    assert_one_line_error(run_expand('kinematics_params:=%s' % (tmp_path / 'broken.yaml')),
+                          'kinematics_params', 'not valid YAML')
+
+
+def test_parameter_file_of_the_wrong_kind():
+    # a joint limits file given as kinematics
+    run = run_expand('kinematics_params:=%s' % os.path.join(UR_CONFIG, 'joint_limits.yaml'))
+    assert_one_line_error(run, "no 'kinematics' section")
+
+
+def test_parameter_file_missing_a_joint(tmp_path):
+    run = run_expand('kinematics_params:=%s' % kinematics_without(tmp_path, 'wrist_3'))
+    assert_one_line_error(run, 'wrist_3')
+
+
+@pytest.mark.parametrize('prefix', ['a b_', '1robot_', 'arm-1_', 'tool.', '/abs_'])
+def test_prefix_that_is_not_a_tf_frame_name(prefix):
+    assert_one_line_error(run_expand('prefix:=%s' % prefix), 'prefix', 'TF frame')
+
+
+@pytest.mark.parametrize('package', ['ur_description', 'robotiq_ft_sensor',
+                                     'robotiq_2f_140_gripper_visualization'])
+def test_missing_upstream_package(package, tmp_path):
+    # A ROS_PACKAGE_PATH with every package the model needs but one.
+    import rospkg
+    rospack = rospkg.RosPack()
+    for name in ('ur3_ft_gripper_description', 'ur_description', 'robotiq_ft_sensor',
+                 'robotiq_2f_140_gripper_visualization'):
+        if name != package:
+            os.symlink(rospack.get_path(name), str(tmp_path / name))
+    env = dict(os.environ, ROS_PACKAGE_PATH=str(tmp_path))
+    assert_one_line_error(run_expand(env=env), "'%s' not found" % package, '.repos')
+
+
+def test_missing_xacro(tmp_path):
+    # A xacro module that cannot be imported, ahead of the real one on sys.path.
+    (tmp_path / 'xacro').mkdir()
+    (tmp_path / 'xacro' / '__init__.py').write_text("raise ImportError('No module named xacro')\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ.get('PYTHONPATH', '')]))
+    assert_one_line_error(run_expand(env=env), 'xacro is not installed')
+
+
+def test_unknown_xacro_file():
+    assert_one_line_error(run_expand('/nonexistent/cell.xacro'), 'xacro file not found')
+
+
+def _dump_params(*args):
+    return subprocess.run(['roslaunch', '--dump-params', 'ur3_ft_gripper_description',
+                           'load_ur3_ft_gripper.launch'] + list(args),
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                          timeout=120)
+
+
+def test_load_launch_sets_robot_description():
+    run = _dump_params()
+    assert run.returncode == 0, run.stderr
+    assert '/robot_description' in run.stdout and 'robotiq_arg2f_base_link' in run.stdout
+
+
+def test_load_launch_with_bad_file_stops_before_setting_anything():
+    # A real roslaunch (not --dump-params, which exits 0 on errors) on an unused
+    # master port: it must stop while loading, before it starts a master or sets a parameter.
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:11391')
+    run = subprocess.run(['roslaunch', 'ur3_ft_gripper_description', 'load_ur3_ft_gripper.launch',
+                          'kinematics_params:=/nonexistent/calibration.yaml'],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                         env=env, timeout=120)
+    assert run.returncode == 1
+    assert 'expand_description: error: kinematics_params: file not found' in run.stderr
+    assert 'auto-starting new master' not in run.stdout
+    assert 'PARAMETERS' not in run.stdout
