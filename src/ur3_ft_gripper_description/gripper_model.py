@@ -1,0 +1,188 @@
+"""2F-140 opening <-> finger_joint angle, derived from the model's own finger kinematics.
+
+Pure numpy (no ROS imports). The mapping is not typed in: it is computed by
+forward kinematics of the expanded URDF (mimic joints included), as the gap
+between the inner faces of ``left_inner_finger_pad`` and
+``right_inner_finger_pad``, so it follows whatever robotiq variant is on the
+ROS_PACKAGE_PATH.
+"""
+
+import numpy as np
+import yaml
+
+from ur3_ft_gripper_description import kinematics
+
+FINGER_JOINT = 'finger_joint'
+PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
+
+
+def load_gripper_spec(path):
+    """The `gripper` section (stroke, min_speed, max_speed in m, m/s) of a YAML file."""
+    with open(path) as f:
+        data = yaml.safe_load(f) or {}
+    spec = data.get('gripper') if isinstance(data, dict) else None
+    if not isinstance(spec, dict) or 'stroke' not in spec:
+        raise ValueError("%s: no 'gripper' section with a stroke" % path)
+    return {k: float(v) for k, v in spec.items()}
+
+
+def step_toward(current, target, speed, dt):
+    """Where a point at `current` moving at most `speed` for `dt` towards `target` ends up."""
+    if speed < 0 or dt < 0:
+        raise ValueError('speed and dt must be >= 0, got %r and %r' % (speed, dt))
+    reach = speed * dt
+    delta = target - current
+    if abs(delta) <= reach:
+        return target
+    return current + np.copysign(reach, delta)
+
+
+def _pad_thickness(link_element):
+    """Box size of a pad link (collision first, else visual), or None if it is no box."""
+    for tag in ('collision', 'visual'):
+        for part in link_element.getElementsByTagName(tag):
+            for box in part.getElementsByTagName('box'):
+                return [float(v) for v in box.getAttribute('size').split()]
+    return None
+
+
+class GripperKinematics(object):
+    """Gap between the finger pads as a function of ``finger_joint`` and back.
+
+    ``opening(angle)`` is the distance between the two pads' inner (facing)
+    surfaces, measured along the pad normal: the pad frames' centre distance
+    projected on the normal, less half a pad thickness on each side (the
+    thickness is the pad box's extent along that normal, 0.0075 m in both
+    upstream macros). ``angle(opening)`` inverts it: a table of `samples`
+    angles over the joint's limits, linear interpolation to bracket the
+    answer, then bisection on the exact forward kinematics, so that
+    ``angle(opening(a)) == a`` to far better than 1e-6 rad.
+
+    The joint's lower limit (0.0 rad) is fully open, the upper (0.7 rad)
+    closed, and the gap shrinks monotonically in between (checked on
+    construction).
+
+    Model versus the real gripper
+    -----------------------------
+    With the jr-robotics (Noetic) 2F-140 macro the pads' inner faces are
+    about 0.1285 m apart when open and touch (-0.2 mm, a hair of overlap) at
+    0.7 rad: the model's open width is about 11.5 mm short of the nominal
+    0.140 m stroke of the real 2F-140 (whose fingertips are 140 mm apart fully
+    open). ``min_opening`` / ``max_opening`` give the values for the model
+    at hand.
+
+    Commands on the nominal stroke
+    ------------------------------
+    Commands and reported positions of the simulated gripper use the real
+    device's scale, 0..``stroke`` (0.140 m). ``command_to_opening`` maps that
+    range linearly onto the model's [min_opening, max_opening] (scaling, not
+    clamping). Reasons: (1) the real gripper's position register spans its
+    whole travel for 0..stroke, so the full command range must drive the
+    full joint range 0..0.7 rad; (2) with clamping, every command between
+    the model's maximum and 0.140 m would land on the same angle and could
+    never be reported back as reached, so a client waiting for "position
+    reached" would stall; (3) the mapping stays one-to-one, so a joint angle
+    turns back into exactly the command that produced it. The price is a
+    scale error of at most about 8 % between the command and the pad gap
+    drawn by the model, which only matters for the model's looks.
+    """
+
+    def __init__(self, urdf_text, prefix='', stroke=0.140, samples=200):
+        self.model = kinematics.Model(urdf_text)
+        self.joint_name = prefix + FINGER_JOINT
+        if self.joint_name not in self.model.joints:
+            raise ValueError("the model has no joint '%s'" % self.joint_name)
+        joint = self.model.joints[self.joint_name]
+        if joint.lower is None or joint.upper is None or not joint.upper > joint.lower:
+            raise ValueError("joint '%s' has no usable <limit>" % self.joint_name)
+        self.lower, self.upper = joint.lower, joint.upper
+        self.stroke = float(stroke)
+        base = joint.parent
+        self._chains = []
+        for pad in PADS:
+            if prefix + pad not in self.model.link_elements:
+                raise ValueError("the model has no link '%s'" % (prefix + pad))
+            self._chains.append(self.model.chain(base, prefix + pad))
+        box = _pad_thickness(self.model.link_elements[prefix + PADS[0]])
+        self._box = np.asarray(box if box else (0.0, 0.0, 0.0), dtype=float)
+        self.angles = np.linspace(self.lower, self.upper, int(samples))
+        self.openings = np.array([self.opening_exact(a) for a in self.angles])
+        if not np.all(np.diff(self.openings) < 0):
+            raise ValueError('the pad gap of the model does not shrink monotonically '
+                             'as %s goes from %g to %g' % (self.joint_name, self.lower, self.upper))
+
+    # -- forward kinematics --------------------------------------------------
+
+    def _pose(self, chain, angle):
+        positions = {self.joint_name: angle}
+        t = np.eye(4)
+        for joint in chain:
+            t = t.dot(joint.origin).dot(joint.motion(self.model.position(joint, positions)))
+        return t
+
+    def pad_poses(self, angle):
+        """Poses (4x4) of the left and right pads in the gripper base frame."""
+        return tuple(self._pose(chain, angle) for chain in self._chains)
+
+    def opening_exact(self, angle):
+        """Gap between the pads' inner faces at `angle`, from forward kinematics."""
+        left, right = self.pad_poses(angle)
+        centres = right[:3, 3] - left[:3, 3]
+        axes = left[:3, :3]
+        # The pad normal is the pad axis best aligned with the line between the pads.
+        k = int(np.argmax(np.abs(axes.T.dot(centres))))
+        normal = axes[:, k] * np.sign(axes[:, k].dot(centres))
+        return float(normal.dot(centres) - self._box[k])
+
+    # -- public mapping ------------------------------------------------------
+
+    @property
+    def max_opening(self):
+        """Gap when fully open (angle = lower limit)."""
+        return float(self.openings[0])
+
+    @property
+    def min_opening(self):
+        """Gap when fully closed (angle = upper limit); may be slightly negative."""
+        return float(self.openings[-1])
+
+    def opening(self, angle):
+        """Pad gap (m) at finger_joint `angle` (rad), clamped to the joint limits."""
+        return self.opening_exact(min(max(float(angle), self.lower), self.upper))
+
+    def angle(self, opening):
+        """finger_joint angle (rad) giving pad gap `opening` (m), clamped to the model's range."""
+        opening = float(opening)
+        if opening >= self.max_opening:
+            return self.lower
+        if opening <= self.min_opening:
+            return self.upper
+        # Openings decrease along the table: find the bracketing samples.
+        i = int(np.searchsorted(-self.openings, -opening))
+        lo, hi = self.angles[i - 1], self.angles[i]
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            if self.opening_exact(mid) > opening:
+                lo = mid
+            else:
+                hi = mid
+            if hi - lo < 1e-12:
+                break
+        return 0.5 * (lo + hi)
+
+    def command_to_opening(self, command):
+        """Model pad gap for a command on the nominal stroke (see the class docstring)."""
+        c = min(max(float(command), 0.0), self.stroke)
+        return self.min_opening + (c / self.stroke) * (self.max_opening - self.min_opening)
+
+    def opening_to_command(self, opening):
+        """Inverse of command_to_opening."""
+        span = self.max_opening - self.min_opening
+        c = (float(opening) - self.min_opening) / span * self.stroke
+        return min(max(c, 0.0), self.stroke)
+
+    def command_to_angle(self, command):
+        return self.angle(self.command_to_opening(command))
+
+    def angle_to_command(self, angle):
+        return self.opening_to_command(self.opening(angle))

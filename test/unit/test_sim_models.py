@@ -1,0 +1,206 @@
+"""Pure models behind the simulated FT 300 and 2F-140 (no ROS master)."""
+import os
+
+import numpy as np
+import pytest
+
+from conftest import PACKAGE_DIR
+from ur3_ft_gripper_description import gripper_model, kinematics, wrench_model
+from ur3_ft_gripper_description.wrench_model import STANDARD_GRAVITY as G
+
+PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'ft300_payload.yaml')
+
+
+# -- payload file --------------------------------------------------------------
+
+def test_payload_file_holds_the_gripper_only():
+    payload = wrench_model.load_payload(PAYLOAD_YAML)
+    # FT 300 manual: FT300 + 2F-140 = 1275 g, FT300 alone = 300 g.
+    assert payload.mass == pytest.approx(0.975, abs=0.05)
+    assert payload.frame_id == 'robotiq_ft_frame_id'
+    # The gripper sits on the +z side of the sensor, on its axis.
+    assert payload.com[2] > 0.03 and np.allclose(payload.com[:2], 0.0)
+    assert payload.noise_force > 0 and payload.noise_torque > 0
+    assert payload.rate == pytest.approx(100.0)
+
+
+def test_gripper_spec_file():
+    spec = gripper_model.load_gripper_spec(PAYLOAD_YAML)
+    assert spec['stroke'] == pytest.approx(0.140)
+    assert 0 < spec['min_speed'] < spec['max_speed']
+
+
+def test_held_object_moves_the_centre_of_mass():
+    payload = wrench_model.Payload(mass=1.0, com=[0, 0, 0.06])
+    mass, com = payload.combined(0.5, [0.0, 0.03, 0.24])
+    assert mass == pytest.approx(1.5)
+    assert np.allclose(com, [0.0, 0.01, 0.12])
+    heavier = payload.with_object(0.5, [0.0, 0.03, 0.24])
+    assert heavier.mass == pytest.approx(1.5) and np.allclose(heavier.com, com)
+    assert payload.mass == 1.0  # the original is untouched
+    assert payload.combined(0.0, [9, 9, 9])[1] == pytest.approx(payload.com)
+
+
+# -- gravity wrench --------------------------------------------------------------
+
+MASS, COM = 0.975, np.array([0.0, 0.0, 0.062])
+
+
+def test_sensor_pointing_down_is_pulled_along_plus_z():
+    # Sensor z along world -z (tool pointing at the floor): rotation of pi about x.
+    down = kinematics.rpy_matrix(np.pi, 0, 0)
+    force, torque = wrench_model.gravity_wrench(down, MASS, COM)
+    assert np.allclose(force, [0, 0, MASS * G])
+    assert np.allclose(torque, 0.0)  # COM on the line of action
+
+
+def test_sensor_pointing_up_is_pushed_along_minus_z():
+    force, torque = wrench_model.gravity_wrench(np.eye(3), MASS, COM)
+    assert np.allclose(force, [0, 0, -MASS * G])
+    assert np.allclose(torque, 0.0)
+
+
+def test_horizontal_sensor_sees_weight_across_and_a_lever_torque():
+    # Sensor z along world +x, sensor x along world +z: world down is sensor -x.
+    horizontal = np.column_stack([[0, 0, 1], [0, -1, 0], [1, 0, 0]]).astype(float)
+    assert np.linalg.det(horizontal) == pytest.approx(1.0)
+    force, torque = wrench_model.gravity_wrench(horizontal, MASS, COM)
+    assert np.allclose(force, [-MASS * G, 0, 0])
+    # 0.062 m lever along z, weight along -x: torque = z x (-x) = -y.
+    assert np.allclose(torque, [0, -0.062 * MASS * G, 0])
+
+
+@pytest.mark.parametrize('rpy', [(0.3, -1.1, 2.0), (2.5, 0.4, -0.7), (-1.2, 1.3, 0.1)])
+def test_any_orientation_magnitude_and_lever(rpy):
+    com = np.array([0.01, -0.02, 0.07])
+    rotation = kinematics.rpy_matrix(*rpy)
+    force, torque = wrench_model.gravity_wrench(rotation, MASS, com)
+    assert np.linalg.norm(force) == pytest.approx(MASS * G)
+    assert np.allclose(torque, np.cross(com, force))
+    assert torque.dot(force) == pytest.approx(0.0, abs=1e-9)
+    # Back in the world frame, the force points straight down.
+    assert np.allclose(rotation.dot(force), [0, 0, -MASS * G])
+
+
+def test_gravity_vector_in_sensor_frame_is_accepted():
+    force, _ = wrench_model.gravity_wrench([0, 3.0, 0], 2.0, [0, 0, 0.1], g=10.0)
+    assert np.allclose(force, [0, 20.0, 0])
+
+
+def test_gravity_wrench_rejects_a_zero_direction():
+    with pytest.raises(ValueError):
+        wrench_model.gravity_wrench([0, 0, 0], MASS, COM)
+
+
+def test_noise_has_the_datasheet_spread():
+    rng = np.random.default_rng(1)
+    samples = [wrench_model.add_noise((np.zeros(3), np.zeros(3)), 0.1, 0.005, rng)
+               for _ in range(4000)]
+    forces = np.array([f for f, _ in samples])
+    torques = np.array([t for _, t in samples])
+    assert np.std(forces) == pytest.approx(0.1, rel=0.05)
+    assert np.std(torques) == pytest.approx(0.005, rel=0.05)
+
+
+# -- zero offset --------------------------------------------------------------
+
+def test_zero_offset_removes_the_wrench_at_set_time_only():
+    offset = wrench_model.ZeroOffset()
+    first = wrench_model.gravity_wrench(np.eye(3), MASS, COM)
+    assert not offset.is_set
+    assert np.allclose(offset.apply(first)[0], first[0])  # no offset yet: unchanged
+    offset.set(first)
+    assert offset.is_set
+    force, torque = offset.apply(first)
+    assert np.allclose(force, 0.0) and np.allclose(torque, 0.0)
+    # Rotate the tool afterwards: the reading is the change since zeroing.
+    turned = wrench_model.gravity_wrench(kinematics.rpy_matrix(np.pi, 0, 0), MASS, COM)
+    force, _ = offset.apply(turned)
+    assert np.allclose(force, [0, 0, 2 * MASS * G])
+    # The stored offset is a copy, not a view of the caller's arrays.
+    first[0][:] = 99.0
+    assert np.allclose(offset.apply(turned)[0], [0, 0, 2 * MASS * G])
+    offset.clear()
+    assert np.allclose(offset.apply(turned)[0], turned[0])
+
+
+# -- gripper opening <-> finger angle --------------------------------------------
+
+@pytest.fixture(scope='module')
+def gripper(default_model):
+    return gripper_model.GripperKinematics(default_model.text)
+
+
+def test_gripper_joint_range_comes_from_the_model(gripper, default_model):
+    joint = default_model.joints['finger_joint']
+    assert (gripper.lower, gripper.upper) == (joint.lower, joint.upper)
+    assert gripper.lower == pytest.approx(0.0) and gripper.upper == pytest.approx(0.7)
+
+
+def test_open_end_is_the_widest(gripper):
+    assert gripper.opening(0.0) == pytest.approx(gripper.max_opening)
+    assert gripper.max_opening == max(gripper.openings)
+    # A 140 mm-class gripper: open between 0.10 and 0.15 m, closed about 0.
+    assert 0.10 < gripper.max_opening < 0.15
+    assert abs(gripper.min_opening) < 0.005
+
+
+def test_opening_shrinks_monotonically(gripper):
+    angles = np.linspace(0.0, 0.7, 301)
+    openings = [gripper.opening(a) for a in angles]
+    assert np.all(np.diff(openings) < 0)
+
+
+def test_opening_matches_independent_forward_kinematics(gripper, default_model):
+    # Pads' centre distance from the plain Model, less one pad thickness (box z = 0.0075).
+    for a in (0.0, 0.2, 0.45, 0.7):
+        positions = {'finger_joint': a}
+        left = default_model.to_root('left_inner_finger_pad', positions)[:3, 3]
+        right = default_model.to_root('right_inner_finger_pad', positions)[:3, 3]
+        assert gripper.opening(a) == pytest.approx(np.linalg.norm(right - left) - 0.0075, abs=1e-6)
+
+
+def test_round_trip(gripper):
+    for a in np.linspace(0.0, 0.7, 37):
+        assert gripper.angle(gripper.opening(a)) == pytest.approx(a, abs=1e-6)
+    for o in np.linspace(gripper.min_opening, gripper.max_opening, 23):
+        assert gripper.opening(gripper.angle(o)) == pytest.approx(o, abs=1e-7)
+
+
+def test_endpoints_and_clamping_map_to_joint_limits(gripper):
+    assert gripper.angle(gripper.max_opening) == pytest.approx(0.0, abs=1e-9)
+    assert gripper.angle(gripper.min_opening) == pytest.approx(0.7, abs=1e-9)
+    assert gripper.angle(1.0) == 0.0 and gripper.angle(-1.0) == 0.7
+    assert gripper.opening(-0.5) == gripper.opening(0.0)
+    assert gripper.opening(2.0) == gripper.opening(0.7)
+
+
+def test_nominal_stroke_scales_onto_the_full_joint_range(gripper):
+    assert gripper.command_to_angle(0.140) == pytest.approx(0.0, abs=1e-9)
+    assert gripper.command_to_angle(0.0) == pytest.approx(0.7, abs=1e-9)
+    assert gripper.command_to_angle(0.5) == 0.0  # beyond the stroke: clamped
+    for c in (0.0, 0.01, 0.07, 0.1285, 0.133, 0.14):
+        assert gripper.angle_to_command(gripper.command_to_angle(c)) == pytest.approx(c, abs=1e-6)
+    commands = np.linspace(0, 0.14, 15)
+    assert np.all(np.diff([gripper.command_to_angle(c) for c in commands]) < 0)
+
+
+def test_prefixed_model(expand_model):
+    model = expand_model(prefix='left_')
+    gripper = gripper_model.GripperKinematics(model.text, prefix='left_')
+    assert gripper.angle(gripper.opening(0.3)) == pytest.approx(0.3, abs=1e-6)
+    with pytest.raises(ValueError):
+        gripper_model.GripperKinematics(model.text)  # no unprefixed finger_joint
+
+
+def test_step_toward():
+    assert gripper_model.step_toward(0.14, 0.0, 0.1, 0.01) == pytest.approx(0.139)
+    assert gripper_model.step_toward(0.0, 0.14, 0.1, 0.01) == pytest.approx(0.001)
+    assert gripper_model.step_toward(0.05, 0.0505, 0.1, 0.01) == 0.0505  # no overshoot
+    assert gripper_model.step_toward(0.05, 0.05, 0.1, 0.01) == 0.05
+    position = 0.14
+    for _ in range(100):  # 1 s at 100 Hz and 0.15 m/s covers the stroke
+        position = gripper_model.step_toward(position, 0.0, 0.15, 0.01)
+    assert position == 0.0
+    with pytest.raises(ValueError):
+        gripper_model.step_toward(0.0, 0.1, -1.0, 0.01)
