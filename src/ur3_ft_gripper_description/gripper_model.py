@@ -113,16 +113,10 @@ class GripperKinematics(object):
 
     # -- forward kinematics --------------------------------------------------
 
-    def _pose(self, chain, angle):
-        positions = {self.joint_name: angle}
-        t = np.eye(4)
-        for joint in chain:
-            t = t.dot(joint.origin).dot(joint.motion(self.model.position(joint, positions)))
-        return t
-
     def pad_poses(self, angle):
         """Poses (4x4) of the left and right pads in the gripper base frame."""
-        return tuple(self._pose(chain, angle) for chain in self._chains)
+        positions = {self.joint_name: angle}
+        return tuple(self.model.chain_transform(chain, positions) for chain in self._chains)
 
     def opening_exact(self, angle):
         """Gap between the pads' inner faces at `angle`, from forward kinematics."""

@@ -129,13 +129,18 @@ class Model(object):
             return positions.get(source, 0.0) * multiplier + offset
         return positions.get(joint.name, 0.0)
 
-    def to_root(self, link, positions=None):
-        """Pose of `link` in the root frame."""
+    def chain_transform(self, joints, positions=None):
+        """Product of the joints' origins and motions, e.g. of a list from chain()."""
         positions = positions or {}
         t = np.eye(4)
-        for joint in self.chain(self.root(), link) if link != self.root() else []:
+        for joint in joints:
             t = t.dot(joint.origin).dot(joint.motion(self.position(joint, positions)))
         return t
+
+    def to_root(self, link, positions=None):
+        """Pose of `link` in the root frame."""
+        root = self.root()
+        return self.chain_transform(self.chain(root, link) if link != root else [], positions)
 
     def transform(self, from_link, to_link, positions=None):
         """Pose of `to_link` in `from_link` (what tf2 lookup_transform(from, to) returns)."""

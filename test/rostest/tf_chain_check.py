@@ -1,8 +1,6 @@
 #!/usr/bin/env python3
 """rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads."""
 import os
-import tempfile
-import textwrap
 import unittest
 
 import numpy as np
@@ -17,12 +15,7 @@ CHAIN = ['base_link', 'tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_
 PADS = ['left_inner_finger_pad', 'right_inner_finger_pad']
 TIMEOUT = rospy.Duration(30)
 
-FT300_ALONE = textwrap.dedent('''\
-    <robot name="ft300_alone" xmlns:xacro="http://wiki.ros.org/xacro">
-      <xacro:include filename="$(find robotiq_ft_sensor)/urdf/robotiq_ft300.urdf.xacro"/>
-      <link name="tool0"/>
-      <xacro:robotiq_ft300 parent="tool0" prefix=""><origin xyz="0 0 0" rpy="0 0 0"/></xacro:robotiq_ft300>
-    </robot>''')
+FT300_ALONE = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'data', 'ft300_alone.xacro')
 
 
 class TfChainTest(unittest.TestCase):
@@ -55,12 +48,7 @@ class TfChainTest(unittest.TestCase):
         self.assertGreater(abs(left[1] - right[1]), 0.1, 'at finger_joint 0 the gripper is open')
 
     def test_tool0_to_gripper_equals_upstream_ft300_macro(self):
-        with tempfile.NamedTemporaryFile('w', suffix='.xacro', delete=False) as f:
-            f.write(FT300_ALONE)
-        try:
-            ft300 = kinematics.Model(description.to_xml(description.run_xacro(f.name)))
-        finally:
-            os.unlink(f.name)
+        ft300 = kinematics.Model(description.to_xml(description.run_xacro(FT300_ALONE)))
         expected = ft300.transform('tool0', 'robotiq_ft_frame_id')
         np.testing.assert_allclose(self.lookup('tool0', 'robotiq_arg2f_base_link'), expected, atol=1e-6)
 

@@ -85,16 +85,10 @@ def test_meshes_are_upstream_package_uris_that_resolve(default_model):
         assert os.path.isfile(os.path.join(rospack.get_path(package), relative)), uri
 
 
-def test_tool0_to_gripper_is_the_upstream_ft300_offset(default_model, tmp_path):
+def test_tool0_to_gripper_is_the_upstream_ft300_offset(default_model):
     """tool0 -> robotiq_arg2f_base_link = upstream FT 300 macro, then the gripper mount."""
-    ft300_alone = tmp_path / 'ft300_alone.xacro'
-    ft300_alone.write_text(textwrap.dedent('''\
-        <robot name="ft300_alone" xmlns:xacro="http://wiki.ros.org/xacro">
-          <xacro:include filename="$(find robotiq_ft_sensor)/urdf/robotiq_ft300.urdf.xacro"/>
-          <link name="tool0"/>
-          <xacro:robotiq_ft300 parent="tool0" prefix=""><origin xyz="0 0 0" rpy="0 0 0"/></xacro:robotiq_ft300>
-        </robot>'''))
-    upstream = ExpandedModel(description.to_xml(description.run_xacro(str(ft300_alone))))
+    ft300_alone = os.path.join(PACKAGE_DIR, 'test', 'data', 'ft300_alone.xacro')
+    upstream = ExpandedModel(description.to_xml(description.run_xacro(ft300_alone)))
     expected = upstream.transform('tool0', 'robotiq_ft_frame_id')
     actual = default_model.transform('tool0', 'robotiq_arg2f_base_link')
     np.testing.assert_allclose(actual, expected, atol=1e-9)
