@@ -164,6 +164,16 @@ class GripperKinematics(object):
                 break
         return 0.5 * (lo + hi)
 
+    def table_angle(self, opening):
+        """Like angle(), by linear interpolation in the sample table only.
+
+        Much cheaper than angle() (no bisection), for a node that converts at
+        every publish; with a few thousand samples it agrees with angle() to
+        well under 1e-6 rad, because the gap is a smooth function of the angle.
+        """
+        # np.interp needs increasing x: the openings decrease along the table.
+        return float(np.interp(-float(opening), -self.openings, self.angles))
+
     def command_to_opening(self, command):
         """Model pad gap for a command on the nominal stroke (see the class docstring)."""
         c = min(max(float(command), 0.0), self.stroke)

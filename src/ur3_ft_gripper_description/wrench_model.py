@@ -77,7 +77,7 @@ def combine_masses(parts):
 
 
 def load_payload(path):
-    """Payload from a YAML file like config/ft300_payload.yaml."""
+    """Payload from a YAML file like config/sim_devices.yaml."""
     with open(path) as f:
         data = yaml.safe_load(f) or {}
     if not isinstance(data, dict) or not isinstance(data.get('payload'), dict):

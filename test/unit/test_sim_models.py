@@ -8,7 +8,7 @@ from conftest import PACKAGE_DIR
 from ur3_ft_gripper_description import gripper_model, kinematics, wrench_model
 from ur3_ft_gripper_description.wrench_model import STANDARD_GRAVITY as G
 
-PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'ft300_payload.yaml')
+PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'sim_devices.yaml')
 
 
 # -- payload file --------------------------------------------------------------
