@@ -4,7 +4,7 @@ import math
 import numpy as np
 import pytest
 
-from ur3_ft_gripper_description import ft300_sim, gripper_model, gripper_sim, kinematics, sim_params
+from ur3_ft_gripper_description import ft300_sim, gripper_model, gripper_sim, kinematics, sim_params, wrench_model
 from ur3_ft_gripper_description.wrench_model import STANDARD_GRAVITY as G
 
 
@@ -107,6 +107,22 @@ def test_after_zero_a_new_pose_reads_the_difference():
     sensor.set_zero()
     force, _ = sensor.read(np.eye(3))  # tool pointing up: weight along -z
     assert force == pytest.approx([0, 0, -2 * 0.975 * G])
+
+
+def test_fast_reading_equals_the_reference_model_for_any_orientation():
+    # The node's float arithmetic against wrench_model's numpy reference, for
+    # rotation matrices and the quaternions that tf2 hands the node.
+    settings = ft300_sim.FT300Settings.from_params(
+        params(noise_force=0, noise_torque=0, payload_mass=0.4, payload_com=[0.01, -0.02, 0.15]))
+    sensor = ft300_sim.SensorModel(settings)
+    rng = np.random.default_rng(3)
+    for q in rng.normal(size=(50, 4)):
+        x, y, z, w = q / np.linalg.norm(q)
+        rotation = kinematics.quaternion_matrix(x, y, z, w)
+        force, torque = wrench_model.gravity_wrench(rotation, settings.payload.mass, settings.payload.com)
+        for got in (sensor.read(rotation), sensor.read_quaternion(x, y, z, w)):
+            assert got[0] == pytest.approx(force, abs=1e-12)
+            assert got[1] == pytest.approx(torque, abs=1e-12)
 
 
 # -- pose watch ----------------------------------------------------------------------
