@@ -16,8 +16,9 @@ how the nominal stroke maps onto the model's pad gap.
 A NaN, infinite or out-of-range command is ignored with one warning naming
 the valid range; the node keeps its last valid target. The warning is given
 once per kind of bad command (not a number, infinite, below 0, above the
-stroke) and again only after a valid command came in between, so a flood of
-bad commands cannot flood the log.
+stroke) and again only after a valid command came in between and at least
+REWARN_AFTER seconds later, so neither a flood of bad commands nor one that
+alternates bad and good ones can flood the log.
 
 Private parameters (defaults from config/sim_devices.yaml):
   ~prefix            ''  ; prefix of the model's joints
@@ -28,12 +29,16 @@ Private parameters (defaults from config/sim_devices.yaml):
 """
 
 import math
+import time
 
 from ur3_ft_gripper_description import gripper_model, sim_params
 
 # Fine enough that the interpolated angle is within 1e-6 rad of the exact
 # inverse (test_sim_models checks it), cheap enough to build at start-up.
 ANGLE_TABLE_SAMPLES = 4001
+
+# A kind of bad command is warned about at most once per this many seconds.
+REWARN_AFTER = 1.0
 
 
 def command_problem(value, stroke):
@@ -52,13 +57,15 @@ def command_problem(value, stroke):
 class GripperState(object):
     """Target and current opening, and the motion between them (no ROS)."""
 
-    def __init__(self, stroke, speed, initial_opening, log_warn):
+    def __init__(self, stroke, speed, initial_opening, log_warn, clock=time.monotonic):
         self.stroke = stroke
         self.speed = speed
         self.opening = initial_opening
         self.target = initial_opening
         self._warn = log_warn
-        self._warned = set()
+        self._clock = clock
+        self._warned = set()   # kinds warned about since the last valid command
+        self._last_warning = {}  # kind -> clock() of its last warning
 
     def command(self, value):
         """Take `value` as the new target if valid; returns whether it was taken."""
@@ -69,8 +76,10 @@ class GripperState(object):
             self._warned.clear()
             return True
         kind, what = problem
-        if kind not in self._warned:
+        now = self._clock()
+        if kind not in self._warned and now - self._last_warning.get(kind, -math.inf) >= REWARN_AFTER:
             self._warned.add(kind)
+            self._last_warning[kind] = now
             self._warn('gripper_sim: ignored gripper/command %r: %s; the opening must be between '
                        '0.0 (closed) and %g (open) m. Keeping the target %.4f m.'
                        % (value, what, self.stroke, self.target))

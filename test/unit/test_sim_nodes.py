@@ -204,17 +204,28 @@ def test_commands_in_the_stroke_are_valid(value):
 
 
 def test_bad_commands_are_ignored_and_warned_once_per_kind():
-    warn = Log()
-    state = gripper_sim.GripperState(0.140, 0.25, 0.140, warn)
+    warn, clock = Log(), [100.0]
+    state = gripper_sim.GripperState(0.140, 0.25, 0.140, warn, clock=lambda: clock[0])
     assert state.command(0.05)
     for value in [float('nan'), 0.5, float('nan'), 0.6, -1.0, float('inf')] * 100:
         assert not state.command(value)
     assert state.target == 0.05
     assert len(warn.lines) == 4  # nan, above, below, inf
     assert all('between 0.0 (closed) and 0.14 (open)' in line for line in warn.lines)
+    clock[0] += gripper_sim.REWARN_AFTER
     assert state.command(0.06)  # a valid command re-arms the warnings
     state.command(0.5)
     assert len(warn.lines) == 5 and state.target == 0.06
+
+
+def test_bad_commands_alternating_with_good_ones_warn_once_per_kind_and_second():
+    warn, clock = Log(), [100.0]
+    state = gripper_sim.GripperState(0.140, 0.25, 0.140, warn, clock=lambda: clock[0])
+    for i in range(3000):  # 3 s of 1000 commands per second, every other one bad
+        clock[0] += 0.001
+        assert state.command(float('nan') if i % 2 else 0.001 * (i % 140)) != bool(i % 2)
+    assert len(warn.lines) == 3  # at 100.001, 101.001 (+/- a step), 102.00x
+    assert state.target == pytest.approx(0.001 * (2998 % 140))
 
 
 def test_gripper_moves_at_its_speed_and_stops_on_target():
