@@ -27,7 +27,7 @@ import threading
 
 import numpy as np
 
-from ur3_ft_gripper_description import sim_params, wrench_model
+from ur3_ft_gripper_description import master_watch, sim_params, wrench_model
 
 
 @dataclasses.dataclass
@@ -217,6 +217,7 @@ def run(rospy):
                                'to zero' % (settings.gravity_frame, settings.frame_id))
 
     rospy.Service('robotiq_ft_zero', Trigger, zero)
+    master = master_watch.start(rospy)
     rate = rospy.Rate(settings.rate)
     latest = rospy.Time(0)
     # One message, refilled each cycle: publish() serializes it before returning.
@@ -245,7 +246,7 @@ def run(rospy):
             tf_buffer.clear()
         except rospy.ROSInterruptException:
             break
-    return 0
+    return master.exit_status
 
 
 def main():

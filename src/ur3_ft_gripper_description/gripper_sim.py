@@ -31,7 +31,7 @@ Private parameters (defaults from config/sim_devices.yaml):
 import math
 import time
 
-from ur3_ft_gripper_description import gripper_model, sim_params
+from ur3_ft_gripper_description import gripper_model, master_watch, sim_params
 
 # Fine enough that the interpolated angle is within 1e-6 rad of the exact
 # inverse (test_sim_models checks it), cheap enough to build at start-up.
@@ -151,6 +151,7 @@ def run(rospy):
     def angle_of(opening):
         return fingers.table_angle(fingers.command_to_opening(opening))
 
+    master = master_watch.start(rospy)
     rate = rospy.Rate(settings['rate'])
     last_time = rospy.Time.now()
     last_angle = angle_of(state.opening)
@@ -174,7 +175,7 @@ def run(rospy):
             last_time = rospy.Time.now()
         except rospy.ROSInterruptException:
             break
-    return 0
+    return master.exit_status
 
 
 def main():

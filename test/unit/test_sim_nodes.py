@@ -242,3 +242,56 @@ def test_table_angle_matches_the_exact_inverse(default_model):
     for command in np.linspace(0.0, 0.140, 57):
         opening = fingers.command_to_opening(command)
         assert fingers.table_angle(opening) == pytest.approx(fingers.angle(opening), abs=1e-6)
+
+
+# -- master watch ------------------------------------------------------------------
+
+class FakeMaster(object):
+    """rosgraph.Master's lookupNode as a restarted or unreachable master answers it."""
+    master_uri = 'http://localhost:11311'
+
+    def __init__(self):
+        self.answer = 'http://node:1/'
+
+    def lookupNode(self, name):
+        import rosgraph
+        if isinstance(self.answer, Exception):
+            raise self.answer
+        if self.answer is None:
+            raise rosgraph.MasterError('unknown node [%s]' % name)
+        return self.answer
+
+
+def master_watch_with(register_all):
+    from ur3_ft_gripper_description import master_watch
+    master, warn, info, fatal, shutdowns = FakeMaster(), Log(), Log(), Log(), []
+    watch = master_watch.MasterWatch('/gripper_sim', master, register_all, warn, info, fatal,
+                                     shutdowns.append)
+    return watch, master, warn, info, fatal, shutdowns
+
+
+def test_master_outage_warns_once_and_a_restart_reregisters_once():
+    calls = []
+    watch, master, warn, info, fatal, _ = master_watch_with(lambda: calls.append(1) or 7)
+    assert watch.check('http://node:1/') == 'ok' and not calls
+    master.answer = ConnectionRefusedError(111, 'Connection refused')
+    for _ in range(5):
+        assert watch.check('http://node:1/') == 'unreachable'
+    assert len(warn.lines) == 1 and 'unreachable' in warn.lines[0]
+    master.answer = None  # a new master: it does not know the node
+    assert watch.check('http://node:1/') == 'ok'
+    master.answer = 'http://node:1/'
+    assert watch.check('http://node:1/') == 'ok'
+    assert calls == [1] and len(info.lines) == 1 and 'registered' in info.lines[0]
+    assert fatal.lines == [] and watch.exit_status == 0
+
+
+def test_failed_reregistration_exits_with_one_line():
+    def fail():
+        raise OSError('connection reset')
+    watch, master, _, _, fatal, shutdowns = master_watch_with(fail)
+    master.answer = None
+    assert watch.check('http://node:1/') == 'failed'
+    assert watch.check('http://node:1/') == 'failed'
+    assert len(fatal.lines) == 1 and 'start the node again' in fatal.lines[0]
+    assert len(shutdowns) == 1 and watch.exit_status == 1
