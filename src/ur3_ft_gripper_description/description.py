@@ -127,7 +127,7 @@ def check_parameter_file(arg, path):
             arg, path, ', '.join(missing), section, fix))
 
 
-def _load_xacro():
+def load_xacro():
     """Import xacro, making `$(find pkg)` use ROS_PACKAGE_PATH (ROS 1)."""
     try:
         import xacro
@@ -169,7 +169,7 @@ def run_xacro(xacro_file, mappings=None):
     for arg, value in mappings.items():
         check_parameter_file(arg, value)
     check_prefix(mappings.get('prefix', ''))
-    xacro = _load_xacro()
+    xacro = load_xacro()
     try:
         return xacro.process_file(xacro_file, mappings=mappings)
     except Exception as e:  # xacro raises many types; all become one line
