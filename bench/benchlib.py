@@ -1,0 +1,146 @@
+"""Shared by bench/benchmarks.py and bench/soak.py: own ROS master, processes, numbers, RESULTS.md.
+
+Everything here starts its own rosmaster on a free port, so a benchmark never
+touches a master someone else uses, and stops only the processes it started.
+"""
+import datetime
+import os
+import platform
+import signal
+import socket
+import subprocess
+import sys
+import time
+import xmlrpc.client
+
+BENCH_DIR = os.path.dirname(os.path.abspath(__file__))
+PACKAGE_DIR = os.path.dirname(BENCH_DIR)
+CLK_TCK = os.sysconf('SC_CLK_TCK')
+
+
+def free_port():
+    with socket.socket() as s:
+        s.bind(('localhost', 0))
+        return s.getsockname()[1]
+
+
+def use_new_master():
+    """Start a rosmaster on a free port and point this process (and its children) at it."""
+    port = free_port()
+    uri = 'http://localhost:%d' % port
+    os.environ['ROS_MASTER_URI'] = uri
+    log = open(os.devnull, 'w')
+    process = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=log, stderr=log)
+    wait_for(lambda: master_pid(uri), 30, 'rosmaster on port %d' % port)
+    return process
+
+
+def master_pid(uri):
+    try:
+        return xmlrpc.client.ServerProxy(uri).getPid('/bench')[2]
+    except OSError:
+        return None
+
+
+def wait_for(condition, timeout, what, step=0.01):
+    end = time.monotonic() + timeout
+    while time.monotonic() < end:
+        value = condition()
+        if value:
+            return value
+        time.sleep(step)
+    raise RuntimeError('timed out after %g s waiting for %s' % (timeout, what))
+
+
+def stop(process, timeout=15):
+    """SIGINT (what roslaunch and rospy expect), then SIGKILL if it does not go."""
+    if process is None or process.poll() is not None:
+        return
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+def roslaunch(*args, env=None, log=None):
+    out = open(log, 'w') if log else subprocess.DEVNULL
+    return subprocess.Popen(['roslaunch'] + list(args), stdout=out, stderr=subprocess.STDOUT,
+                            env=env)
+
+
+def node(script, *args, env=None):
+    """One of this package's nodes, run directly so that its pid is the node's."""
+    return subprocess.Popen([sys.executable, os.path.join(PACKAGE_DIR, 'scripts', script)] + list(args),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+
+
+def node_pid(name):
+    """pid of a running ROS node, from its own slave API."""
+    import rosnode
+    uri = rosnode.get_api_uri(rosnode.rosgraph.Master('/bench'), name)
+    return xmlrpc.client.ServerProxy(uri).getPid('/bench')[2]
+
+
+def cpu_seconds(pid):
+    with open('/proc/%d/stat' % pid) as f:
+        fields = f.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime + stime
+
+
+def rss_mb(pid):
+    with open('/proc/%d/status' % pid) as f:
+        for line in f:
+            if line.startswith('VmRSS:'):
+                return int(line.split()[1]) / 1024.0
+    raise RuntimeError('no VmRSS for pid %d' % pid)
+
+
+def percentile(values, q):
+    ordered = sorted(values)
+    if not ordered:
+        return float('nan')
+    k = min(len(ordered) - 1, max(0, int(round(q / 100.0 * (len(ordered) - 1)))))
+    return ordered[k]
+
+
+def median(values):
+    return percentile(values, 50)
+
+
+def load_average():
+    return '%.2f %.2f %.2f' % os.getloadavg()
+
+
+def machine():
+    cpu = platform.processor() or 'unknown CPU'
+    try:
+        with open('/proc/cpuinfo') as f:
+            cpu = next(line.split(':', 1)[1].strip() for line in f if line.startswith('model name'))
+    except (OSError, StopIteration):
+        pass
+    with open('/proc/meminfo') as f:
+        mem = int(f.readline().split()[1]) / 1024.0 / 1024.0
+    distro = platform.freedesktop_os_release().get('PRETTY_NAME', '') if hasattr(
+        platform, 'freedesktop_os_release') else ''
+    return '%s, %d CPUs, %.1f GB RAM, %s, Linux %s, Python %s' % (
+        cpu, os.cpu_count(), mem, distro, platform.release(), platform.python_version())
+
+
+def now_text():
+    return datetime.datetime.now().astimezone().strftime('%Y-%m-%d %H:%M %Z')
+
+
+def replace_section(path, key, text):
+    """Put `text` between <!-- begin KEY --> and <!-- end KEY --> in `path`, keeping the rest."""
+    begin, end = '<!-- begin %s -->' % key, '<!-- end %s -->' % key
+    old = open(path).read() if os.path.exists(path) else ''
+    block = '%s\n%s\n%s' % (begin, text.strip(), end)
+    if begin in old and end in old:
+        head, rest = old.split(begin, 1)
+        new = head + block + rest.split(end, 1)[1]
+    else:
+        new = (old.rstrip() + '\n\n' if old.strip() else '') + block + '\n'
+    with open(path, 'w') as f:
+        f.write(new)

@@ -1,0 +1,160 @@
+#!/usr/bin/env python3
+"""Soak: the view launch (headless) for a long time, the simulated FT 300 at 100 Hz and
+gripper commands at 10 Hz; checks that the nodes' resident memory does not grow and
+the wrench stream has no gap.
+
+    bench/soak.py [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
+
+Limits (issue 5): resident memory of ft300_sim and gripper_sim grows by at most
+5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
+(header stamps, i.e. as the node published them; the gaps as received here are
+reported too). Exit status 0 when both hold, 1 otherwise. Started on its own
+rosmaster on a free port; `tools/quickstart soak` runs it in the workspace.
+"""
+import argparse
+import math
+import os
+import sys
+import threading
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib  # noqa: E402
+
+RSS_LIMIT_MB = 5.0
+GAP_LIMIT_S = 0.050
+
+
+class Stream(object):
+    """Gaps between consecutive messages of one topic: by header stamp and by receipt."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.counting = False
+        self.count = 0
+        self.last = None
+        self.max_stamp_gap = self.max_receipt_gap = 0.0
+        self.latest = None
+
+    def add(self, msg):
+        received = time.monotonic()
+        stamp = msg.header.stamp.to_sec()
+        with self.lock:
+            self.latest = msg
+            if self.counting and self.last is not None:
+                self.count += 1
+                self.max_stamp_gap = max(self.max_stamp_gap, stamp - self.last[0])
+                self.max_receipt_gap = max(self.max_receipt_gap, received - self.last[1])
+            self.last = (stamp, received)
+
+    def start_counting(self):
+        with self.lock:
+            self.counting = True
+            self.last = None
+
+    def stop_counting(self):
+        with self.lock:
+            self.counting = False
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--minutes', type=float, help='measured time after the warm-up (default 30)')
+    parser.add_argument('--seconds', type=float, help='the same in seconds (for a short run)')
+    parser.add_argument('--warmup', type=float, default=60.0, help='seconds before memory and gaps count')
+    parser.add_argument('--record', help='write the numbers into this RESULTS.md (soak section)')
+    args = parser.parse_args(argv)
+    seconds = args.seconds if args.seconds is not None else 60.0 * (args.minutes or 30.0)
+
+    master = benchlib.use_new_master()
+    launch = None
+    try:
+        import rospy
+        from geometry_msgs.msg import WrenchStamped
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import Float64
+
+        launch = benchlib.roslaunch('ur3_ft_gripper_description', 'view_ur3_ft_gripper.launch',
+                                    'gui:=false', 'rviz:=false', log=os.environ.get('SOAK_LOG'))
+        rospy.init_node('soak', disable_signals=True)
+        wrench, joints = Stream(), Stream()
+        rospy.Subscriber('robotiq_ft_wrench', WrenchStamped, wrench.add, queue_size=1000,
+                         tcp_nodelay=True)
+        rospy.Subscriber('gripper/joint_states', JointState, joints.add, queue_size=1000,
+                         tcp_nodelay=True)
+        command = rospy.Publisher('gripper/command', Float64, queue_size=10)
+        benchlib.wait_for(lambda: wrench.latest and joints.latest and command.get_num_connections(),
+                          60, 'the wrench, the gripper and its command subscriber')
+        pids = {name: benchlib.node_pid('/' + name) for name in ('ft300_sim', 'gripper_sim')}
+
+        start = time.monotonic()
+        rss_at_warmup, rss_max, sent = {}, {}, 0
+        target = 0.140
+        rate = rospy.Rate(10)
+        while time.monotonic() - start < args.warmup + seconds:
+            # A slow sweep between almost closed and open: the gripper always moves.
+            target = 0.070 + 0.060 * math.sin(2 * math.pi * sent / 100.0)
+            command.publish(Float64(round(target, 6)))
+            sent += 1
+            elapsed = time.monotonic() - start
+            if elapsed >= args.warmup and not rss_at_warmup:
+                wrench.start_counting()
+                joints.start_counting()
+                rss_at_warmup = {n: benchlib.rss_mb(p) for n, p in pids.items()}
+                rss_max = dict(rss_at_warmup)
+            if rss_at_warmup and sent % 50 == 0:
+                for n, p in pids.items():
+                    rss_max[n] = max(rss_max[n], benchlib.rss_mb(p))
+            rate.sleep()
+        wrench.stop_counting()
+        joints.stop_counting()
+        rss_end = {n: benchlib.rss_mb(p) for n, p in pids.items()}
+        for n in pids:
+            rss_max[n] = max(rss_max[n], rss_end[n])
+        time.sleep(1.0)  # the last command is reached within 0.56 s (full stroke)
+        opening = rospy.wait_for_message('gripper/opening', Float64, 10).data
+    finally:
+        benchlib.stop(launch)
+        benchlib.stop(master)
+
+    growth = {n: rss_max[n] - rss_at_warmup[n] for n in pids}
+    problems = []
+    for n in pids:
+        if growth[n] > RSS_LIMIT_MB:
+            problems.append('%s resident memory grew by %.1f MB (limit %g)' % (n, growth[n], RSS_LIMIT_MB))
+    if wrench.max_stamp_gap > GAP_LIMIT_S:
+        problems.append('wrench gap %.1f ms (limit %g)' % (1e3 * wrench.max_stamp_gap, 1e3 * GAP_LIMIT_S))
+    if abs(opening - round(target, 6)) > 1e-9:
+        problems.append('gripper at %.4f m, not at the last command %.4f m' % (opening, target))
+    measured = seconds
+    rows = [
+        '| measured | %.0f s after %.0f s warm-up; %d gripper commands at 10 Hz |' % (measured, args.warmup, sent),
+        '| wrench messages | %d (%.1f Hz) |' % (wrench.count, wrench.count / measured),
+        '| wrench: largest gap, published (stamps) / received | %.1f ms / %.1f ms (limit %g ms) |' % (
+            1e3 * wrench.max_stamp_gap, 1e3 * wrench.max_receipt_gap, 1e3 * GAP_LIMIT_S),
+        '| gripper/joint_states: largest gap, published / received | %.1f ms / %.1f ms (%.1f Hz) |' % (
+            1e3 * joints.max_stamp_gap, 1e3 * joints.max_receipt_gap, joints.count / measured),
+    ]
+    for n in sorted(pids):
+        rows.append('| %s resident memory: after warm-up, max, end, growth | %.1f, %.1f, %.1f MB, +%.2f MB '
+                    '(limit %g MB) |' % (n, rss_at_warmup[n], rss_max[n], rss_end[n], growth[n], RSS_LIMIT_MB))
+    rows.append('| gripper follows the last command | %s |' % (
+        'yes' if abs(opening - round(target, 6)) <= 1e-9 else 'no (%.4f m)' % opening))
+    verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems)
+    table = '\n'.join(['| | |', '| --- | --- |'] + rows)
+    print(table)
+    print('soak: %s' % verdict)
+    if args.record:
+        benchlib.replace_section(args.record, 'soak', '\n'.join([
+            '## Soak (`bash tools/quickstart soak`)', '',
+            '%s, %s; load average before: %s. The view launch (headless, sim:=true) on its own '
+            'master; ft300_sim at 100 Hz, commands sweeping 0.01..0.13 m at 10 Hz.' % (
+                benchlib.now_text(), benchlib.machine(), load_before), '',
+            table, '', 'Result: %s' % verdict]))
+    return 0 if not problems else 1
+
+
+load_before = benchlib.load_average()
+
+if __name__ == '__main__':
+    sys.exit(main())
