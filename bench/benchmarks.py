@@ -1,0 +1,389 @@
+#!/usr/bin/env python3
+"""Benchmarks of this package side by side with upstream ur_description, in one run.
+
+    bench/benchmarks.py [--short] [--output bench/RESULTS.md]
+
+Prints the tables and ratios and writes them into the "bench" section of
+RESULTS.md with the machine, date and load. `tools/quickstart bench` runs it
+in the workspace. Measurements, not pass/fail: the exit status is 0 when every
+benchmark ran. --short runs each a few times only (CI keeps the script working).
+"""
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import textwrap
+import threading
+import time
+import xml.dom.minidom
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import benchlib  # noqa: E402
+
+PACKAGE = 'ur3_ft_gripper_description'
+GOALS = {'expansion': 1.25, 'bringup': 1.15}
+
+
+# -- xacro: the real ROS package, or a shim around the same patched PyPI xacro ------
+
+SHIM_MANIFEST = '''<?xml version="1.0"?>
+<package format="3">
+  <name>xacro</name><version>0.0.0</version>
+  <description>Benchmark shim: PyPI xacro with $(find) on ROS_PACKAGE_PATH</description>
+  <maintainer email="none@example.com">bench</maintainer><license>BSD</license>
+</package>
+'''
+SHIM_SCRIPT = '''#!%s
+"""xacro for the benchmark: the PyPI xacro that expand_description runs, same $(find) patch."""
+import sys
+from ur3_ft_gripper_description import description
+sys.exit(description.load_xacro().main())
+'''
+
+
+def xacro_setup(tmp):
+    """(xacro executable, environment for roslaunch, description) for both models."""
+    import rospkg
+    env = dict(os.environ)
+    try:
+        path = os.path.join(rospkg.RosPack().get_path('xacro'), 'xacro')
+        if os.path.exists(path):
+            return path, env, 'xacro ROS package (%s)' % path
+    except rospkg.ResourceNotFound:
+        pass
+    # No xacro ROS package (Debian: xacro from PyPI): `$(find xacro)/xacro` in
+    # upstream's load_ur.launch needs one, so a shim goes on ROS_PACKAGE_PATH, for the benchmark only.
+    folder = os.path.join(tmp, 'xacro')
+    os.makedirs(folder)
+    with open(os.path.join(folder, 'package.xml'), 'w') as f:
+        f.write(SHIM_MANIFEST)
+    script = os.path.join(folder, 'xacro')
+    with open(script, 'w') as f:
+        f.write(SHIM_SCRIPT % sys.executable)
+    os.chmod(script, 0o755)
+    env['ROS_PACKAGE_PATH'] = tmp + os.pathsep + env.get('ROS_PACKAGE_PATH', '')
+    from importlib import metadata
+    return script, env, 'PyPI xacro %s through a `xacro` package shim' % metadata.version('xacro')
+
+
+def upstream_xacro_file():
+    import rospkg
+    return os.path.join(rospkg.RosPack().get_path('ur_description'), 'urdf', 'ur3.xacro')
+
+
+def our_xacro_file():
+    return os.path.join(benchlib.PACKAGE_DIR, 'urdf', 'ur3_ft_gripper.xacro')
+
+
+# -- model expansion ------------------------------------------------------------
+
+def time_command(argv, env):
+    start = time.monotonic()
+    run = subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env,
+                         universal_newlines=True)
+    elapsed = time.monotonic() - start
+    if run.returncode != 0:
+        raise RuntimeError('%s failed: %s' % (' '.join(argv), run.stderr.strip()[-500:]))
+    return elapsed, run.stdout
+
+
+def bench_expansion(xacro, env, runs):
+    commands = {
+        'upstream': [xacro, upstream_xacro_file()],
+        'ours': [xacro, our_xacro_file()],
+        'ours_users': [sys.executable, os.path.join(benchlib.PACKAGE_DIR, 'scripts', 'expand_description')],
+    }
+    times = {k: [] for k in commands}
+    outputs = {}
+    for _ in range(runs):  # interleaved, so that a load change hits all alike
+        for key, argv in commands.items():
+            elapsed, outputs[key] = time_command(argv, env)
+            times[key].append(elapsed)
+    return times, outputs
+
+
+def links_of(urdf):
+    doc = xml.dom.minidom.parseString(urdf)
+    return [e.getAttribute('name') for e in doc.documentElement.childNodes
+            if e.nodeType == e.ELEMENT_NODE and e.tagName == 'link']
+
+
+# -- bring-up ---------------------------------------------------------------------
+
+def bench_bringup(load_launch, links, env, runs, rospy, tf2_ros, timeout=60.0):
+    """Seconds from starting roslaunch until TF has every link of the model; None if never."""
+    times = []
+    root = links[0]
+    for _ in range(runs):
+        buffer = tf2_ros.Buffer()
+        listener = tf2_ros.TransformListener(buffer)
+        start = time.monotonic()
+        launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
+                                    'load:=%s' % load_launch, env=env)
+        try:
+            def all_frames():
+                return all(buffer.can_transform(root, link, rospy.Time(0)) for link in links)
+            end = start + timeout
+            done = None
+            while time.monotonic() < end and launch.poll() is None:
+                if all_frames():
+                    done = time.monotonic() - start
+                    break
+                time.sleep(0.005)
+        finally:
+            benchlib.stop(launch)
+            listener.unregister()
+        times.append(done)
+        if done is None:
+            return None
+    return times
+
+
+# -- ft300_sim --------------------------------------------------------------------
+
+class Received(object):
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.items = []
+
+    def add(self, msg):
+        received = time.monotonic()
+        with self.lock:
+            self.items.append((received, msg))
+
+    def since(self, t):
+        with self.lock:
+            return [(r, m) for r, m in self.items if r >= t]
+
+
+def gaps(values):
+    return [b - a for a, b in zip(values, values[1:])]
+
+
+def bench_ft300(rate, seconds, rospy):
+    from geometry_msgs.msg import WrenchStamped
+    name = 'ft300_bench_%d' % rate
+    received = Received()
+    subscriber = rospy.Subscriber('%s/robotiq_ft_wrench' % name, WrenchStamped, received.add,
+                                  queue_size=10000, tcp_nodelay=True)
+    process = benchlib.node('ft300_sim', '__name:=ft300_sim', '__ns:=/%s' % name, '_rate:=%g' % rate)
+    try:
+        benchlib.wait_for(lambda: received.since(0), 30, 'ft300_sim at %g Hz' % rate)
+        time.sleep(1.0)  # warm-up
+        cpu0, t0 = benchlib.cpu_seconds(process.pid), time.monotonic()
+        time.sleep(seconds)
+        cpu1, t1 = benchlib.cpu_seconds(process.pid), time.monotonic()
+    finally:
+        benchlib.stop(process)
+        subscriber.unregister()
+    window = [(r, m) for r, m in received.since(t0) if r <= t1]
+    stamps = [m.header.stamp.to_sec() for _, m in window]
+    return dict(rate=rate, achieved=len(window) / (t1 - t0),
+                p99_stamp=benchlib.percentile(gaps(stamps), 99),
+                p99_received=benchlib.percentile(gaps([r for r, _ in window]), 99),
+                max_stamp=max(gaps(stamps)), cpu=100.0 * (cpu1 - cpu0) / (t1 - t0))
+
+
+# -- gripper_sim ------------------------------------------------------------------
+
+def bench_gripper(commands, rospy):
+    """Seconds from publishing a command to the first joint state that moves toward it."""
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import Float64
+    received = Received()
+    subscriber = rospy.Subscriber('gripper/joint_states', JointState, received.add, queue_size=1000,
+                                  tcp_nodelay=True)
+    publisher = rospy.Publisher('gripper/command', Float64, queue_size=10, tcp_nodelay=True)
+    process = benchlib.node('gripper_sim', '__name:=gripper_sim')
+    latencies = []
+    try:
+        benchlib.wait_for(lambda: received.since(0) and publisher.get_num_connections(), 30, 'gripper_sim')
+        publisher.publish(Float64(0.07))
+        time.sleep(1.0)
+        opening = 0.07
+        for i in range(commands):
+            target = 0.06 if i % 2 == 0 else 0.07
+            closing = target < opening  # closing raises finger_joint
+            before = received.since(0)[-1][1].position[0]
+            time.sleep(0.0123 * (i % 7) / 7)  # spread the commands over the publish period
+            sent = time.monotonic()
+            publisher.publish(Float64(target))
+            first = None
+            end = sent + 2.0
+            while first is None and time.monotonic() < end:
+                for r, msg in received.since(sent):
+                    moved = msg.position[0] - before
+                    if (moved > 1e-9) if closing else (moved < -1e-9):
+                        first = r
+                        break
+                    before = msg.position[0]
+                time.sleep(0.001)
+            if first is None:
+                raise RuntimeError('gripper_sim did not move toward %g within 2 s' % target)
+            latencies.append(first - sent)
+            opening = target
+            time.sleep(0.25)  # 10 mm at 0.25 m/s takes 40 ms
+    finally:
+        benchlib.stop(process)
+        subscriber.unregister()
+        publisher.unregister()
+    return latencies
+
+
+# -- report -------------------------------------------------------------------------
+
+def ms(seconds):
+    return '%.0f' % (1e3 * seconds) if seconds is not None else 'n/a'
+
+
+def report(r):
+    exp, bring, short = r['expansion'], r['bringup'], r['short']
+    up, ours, users = (benchlib.median(exp[k]) for k in ('upstream', 'ours', 'ours_users'))
+    lines = [
+        '%s; %s; load average before / after: %s / %s; robotiq-%s; %s%s.' % (
+            r['date'], r['machine'], r['load_before'], r['load_after'], r['variant'], r['xacro'],
+            '; SHORT run (CI), not for comparison' if short else ''),
+        '',
+        '### Model expansion (median of %d runs each, wall time of the whole command)' % len(exp['upstream']),
+        '',
+        '| model | command | median ms | min ms | ratio to upstream | goal |',
+        '| --- | --- | ---: | ---: | ---: | --- |',
+        '| upstream `ur_description/urdf/ur3.xacro` (%d links) | xacro | %s | %s | 1.00 | |' % (
+            r['links_upstream'], ms(up), ms(min(exp['upstream']))),
+        '| ours `urdf/ur3_ft_gripper.xacro` (%d links) | the same xacro | %s | %s | **%.2f** | <= %.2f: %s |' % (
+            r['links_ours'], ms(ours), ms(min(exp['ours'])), ours / up, GOALS['expansion'],
+            'met' if ours / up <= GOALS['expansion'] else 'NOT met'),
+        '| ours, what users run | `expand_description` | %s | %s | %.2f | |' % (
+            ms(users), ms(min(exp['ours_users'])), users / up),
+        '',
+    ]
+    b_up = benchlib.median(bring['upstream']) if bring['upstream'] else None
+    rows = [('upstream `load_ur3.launch`', bring['upstream'], None)]
+    rows.append(('ours `load_ur3_ft_gripper.launch` (`expand_description`, what users run)',
+                 bring['ours'], GOALS['bringup']))
+    rows.append(('ours, same xacro as upstream (`bench/load_plain_xacro.launch`)', bring['ours_plain'], None))
+    lines += [
+        '### Bring-up (roslaunch start until every link is in TF; load launch + joint_state_publisher '
+        '+ robot_state_publisher, headless; median of %d runs)' % r['bringup_runs'],
+        '',
+        '| launch | median ms | min ms | ratio to upstream | goal |',
+        '| --- | ---: | ---: | ---: | --- |',
+    ]
+    for label, times, goal in rows:
+        if not times:
+            lines.append('| %s | n/a | n/a | n/a | %s |' % (
+                label, 'robot_state_publisher refuses the plain result (second base_link of the '
+                'jr-robotics fork)' if goal is None and label.startswith('ours') else ''))
+            continue
+        med = benchlib.median(times)
+        ratio = med / b_up
+        goal_text = ''
+        if goal:
+            goal_text = '<= %.2f: %s' % (goal, 'met' if ratio <= goal else 'NOT met')
+        lines.append('| %s | %s | %s | %s | %s |' % (
+            label, ms(med), ms(min(times)), '%.2f' % ratio if label.startswith('ours') else '1.00',
+            goal_text))
+    lines += [
+        '',
+        '### ft300_sim (TF from robot_state_publisher at 50 Hz; %g s per rate after 1 s warm-up)' % r['ft_seconds'],
+        '',
+        '| ~rate Hz | achieved Hz | p99 gap ms (stamps) | p99 gap ms (received) | max gap ms (stamps) '
+        '| CPU % of one core | goal |',
+        '| ---: | ---: | ---: | ---: | ---: | ---: | --- |',
+    ]
+    for f in r['ft300']:
+        goal = ''
+        if f['rate'] == 100:
+            ok = f['p99_stamp'] < 0.012 and f['cpu'] < 5.0
+            goal = 'p99 < 12 ms, CPU < 5 %%: %s' % ('met' if ok else 'NOT met')
+        elif f['rate'] == 1000:
+            goal = 'sustained: %s' % ('met' if f['achieved'] >= 0.95 * 1000 else 'NOT met')
+        lines.append('| %d | %.1f | %.1f | %.1f | %.1f | %.1f | %s |' % (
+            f['rate'], f['achieved'], 1e3 * f['p99_stamp'], 1e3 * f['p99_received'],
+            1e3 * f['max_stamp'], f['cpu'], goal))
+    lat = r['gripper']
+    lines += [
+        '',
+        '### gripper_sim (~rate 50 Hz: period 20 ms; %d commands)' % len(lat),
+        '',
+        '| command -> first joint state moving toward it | median ms | p95 ms | max ms | goal |',
+        '| --- | ---: | ---: | ---: | --- |',
+        '| latency | %.1f | %.1f | %.1f | < 40 ms (two periods): %s |' % (
+            1e3 * benchlib.median(lat), 1e3 * benchlib.percentile(lat, 95), 1e3 * max(lat),
+            'met' if benchlib.percentile(lat, 95) < 0.040 else 'NOT met (p95)'),
+    ]
+    return '\n'.join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser.add_argument('--short', action='store_true', help='few runs, for CI')
+    parser.add_argument('--output', default=os.path.join(benchlib.BENCH_DIR, 'RESULTS.md'),
+                        help='RESULTS.md to write the bench section into')
+    args = parser.parse_args(argv)
+    runs = 2 if args.short else 10
+    results = dict(short=args.short, date=benchlib.now_text(), machine=benchlib.machine(),
+                   load_before=benchlib.load_average(), variant=os.environ.get('ROBOTIQ_VARIANT', '?'))
+    with tempfile.TemporaryDirectory() as tmp:
+        xacro, env, results['xacro'] = xacro_setup(tmp)
+        say('model expansion, %d runs each' % runs)
+        results['expansion'], outputs = bench_expansion(xacro, env, runs)
+        results['links_upstream'] = len(links_of(outputs['upstream']))
+        results['links_ours'] = len(links_of(outputs['ours_users']))
+
+        master = benchlib.use_new_master()
+        env['ROS_MASTER_URI'] = os.environ['ROS_MASTER_URI']
+        try:
+            import rospy
+            import tf2_ros
+            rospy.init_node('bench', disable_signals=True)
+            import rospkg
+            up_launch = os.path.join(rospkg.RosPack().get_path('ur_description'), 'launch', 'load_ur3.launch')
+            our_launch = os.path.join(benchlib.PACKAGE_DIR, 'launch', 'load_ur3_ft_gripper.launch')
+            plain_launch = os.path.join(benchlib.BENCH_DIR, 'load_plain_xacro.launch')
+            results['bringup_runs'] = 1 if args.short else 10
+            say('bring-up, %d runs each' % results['bringup_runs'])
+            up_links, our_links = links_of(outputs['upstream']), links_of(outputs['ours_users'])
+            results['bringup'] = {k: [] for k in ('upstream', 'ours', 'ours_plain')}
+            for _ in range(results['bringup_runs']):  # interleaved, like the expansion
+                for key, launch, links in (('upstream', up_launch, up_links), ('ours', our_launch, our_links),
+                                           ('ours_plain', plain_launch, our_links)):
+                    if results['bringup'][key] is None:
+                        continue
+                    got = bench_bringup(launch, links, env, 1, rospy, tf2_ros,
+                                        timeout=15.0 if key == 'ours_plain' else 60.0)
+                    if got is None and key != 'ours_plain':
+                        raise RuntimeError('%s: the model never completed in TF' % launch)
+                    results['bringup'][key] = None if got is None else results['bringup'][key] + got
+
+            # The simulated devices against our model in TF, as in the view launch.
+            launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
+                                        'load:=%s' % our_launch, env=env)
+            try:
+                benchlib.wait_for(lambda: rospy.has_param('robot_description'), 60, 'robot_description')
+                results['ft_seconds'] = 2.0 if args.short else 10.0
+                results['ft300'] = []
+                for rate in (100, 500, 1000):
+                    say('ft300_sim at %d Hz' % rate)
+                    results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy))
+                say('gripper_sim latency')
+                results['gripper'] = bench_gripper(6 if args.short else 40, rospy)
+            finally:
+                benchlib.stop(launch)
+        finally:
+            benchlib.stop(master)
+    results['load_after'] = benchlib.load_average()
+    text = report(results)
+    print(text)
+    benchlib.replace_section(args.output, 'bench', text)
+    say('written to %s' % args.output)
+    return 0
+
+
+def say(text):
+    print('[bench] %s' % text, file=sys.stderr, flush=True)
+
+
+if __name__ == '__main__':
+    sys.exit(main())
