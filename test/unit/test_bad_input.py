@@ -100,15 +100,38 @@ def test_load_launch_sets_robot_description():
     assert '/robot_description' in run.stdout and 'robotiq_arg2f_base_link' in run.stdout
 
 
-def test_load_launch_with_bad_file_stops_before_setting_anything():
+def _bad_launch_args(case, tmp_path):
+    """roslaunch args for one kind of bad input, and the words its one error line must have."""
+    if case == 'missing file':
+        return ['kinematics_params:=/nonexistent/calibration.yaml'], ['kinematics_params: file not found']
+    if case == 'empty file':
+        (tmp_path / 'empty.yaml').write_text('')
+        return ['joint_limit_params:=%s' % (tmp_path / 'empty.yaml')], ['joint_limit_params', 'is empty']
+    if case == 'malformed file':
+        (tmp_path / 'broken.yaml').write_text('kinematics: [shoulder: {x: 0\n')
+        return ['kinematics_params:=%s' % (tmp_path / 'broken.yaml')], ['not valid YAML']
+    if case == 'joint missing':
+        return ['kinematics_params:=%s' % kinematics_without(tmp_path, 'forearm')], ['forearm']
+    if case == 'bad prefix':
+        return ['prefix:=arm-1_'], ['prefix', 'TF frame']
+    raise ValueError(case)
+
+
+@pytest.mark.parametrize('case', ['missing file', 'empty file', 'malformed file', 'joint missing', 'bad prefix'])
+def test_load_launch_with_bad_input_stops_before_setting_anything(case, tmp_path):
     # A real roslaunch (not --dump-params, which exits 0 on errors) on an unused
-    # master port: it must stop while loading, before it starts a master or sets a parameter.
+    # master port: it must stop while loading, before it starts a master or sets
+    # a parameter (no half-loaded model), with the one error line and no traceback.
+    args, words = _bad_launch_args(case, tmp_path)
     env = dict(os.environ, ROS_MASTER_URI='http://localhost:11391')
-    run = subprocess.run(['roslaunch', 'ur3_ft_gripper_description', 'load_ur3_ft_gripper.launch',
-                          'kinematics_params:=/nonexistent/calibration.yaml'],
+    run = subprocess.run(['roslaunch', 'ur3_ft_gripper_description', 'load_ur3_ft_gripper.launch'] + args,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
                          env=env, timeout=120)
     assert run.returncode == 1
-    assert 'expand_description: error: kinematics_params: file not found' in run.stderr
+    errors = [line for line in run.stderr.splitlines() if line.startswith('expand_description: error: ')]
+    assert len(errors) == 1, run.stderr
+    for word in words:
+        assert word in errors[0], (word, errors[0])
+    assert 'Traceback' not in run.stderr + run.stdout
     assert 'auto-starting new master' not in run.stdout
     assert 'PARAMETERS' not in run.stdout
