@@ -1,0 +1,26 @@
+"""Short runs of the soak and the benchmarks, so that both scripts keep working (issue 5).
+
+The soak's limits are real assertions (memory growth <= 5 MB after warm-up, no
+wrench gap over 50 ms, the gripper at its last command); the benchmarks are
+measurements, so only their output is checked here.
+"""
+import os
+import sys
+
+from conftest import BENCH_DIR, run
+
+
+def test_soak_short():
+    got = run([sys.executable, os.path.join(BENCH_DIR, 'soak.py'), '--seconds', '40', '--warmup', '10'])
+    assert got.returncode == 0 and 'soak: PASS' in got.stdout, got.stdout[-3000:]
+
+
+def test_benchmarks_short(tmp_path):
+    results = tmp_path / 'RESULTS.md'
+    got = run([sys.executable, os.path.join(BENCH_DIR, 'benchmarks.py'), '--short', '--output', str(results)])
+    assert got.returncode == 0, got.stdout[-3000:]
+    text = results.read_text()
+    for row in ('| ours `urdf/ur3_ft_gripper.xacro`', '| ours `load_ur3_ft_gripper.launch`', '| 1000 |',
+                '| latency |'):
+        assert row in text, text
+    assert 'Traceback' not in got.stdout
