@@ -1,5 +1,4 @@
-#!/usr/bin/env python3
-"""Write config/gripper_tcp.yaml from expanded models: generate_gripper_tcp OUT.yaml LABEL=MODEL.urdf..."""
+"""Write config/gripper_tcp.yaml from expanded models: generate_gripper_tcp.py OUT.yaml LABEL=MODEL.urdf..."""
 import sys
 
 from ur3_ft_gripper_description import tcp
