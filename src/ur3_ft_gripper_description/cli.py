@@ -56,3 +56,60 @@ def expand_description_main(argv=None):
         print('expand_description: error: %s' % e, file=sys.stderr)
         return 1
     return 0
+
+
+class _OneLineParser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line and exit status 1, like every other error here."""
+
+    def error(self, message):
+        print('%s: error: %s (see %s --help)' % (self.prog, message, self.prog), file=sys.stderr)
+        sys.exit(1)
+
+
+def export_urdf_main(argv=None):
+    from . import export
+    parser = _OneLineParser(
+        prog='export_urdf',
+        description='Write a flattened URDF of a UR arm + Robotiq FT 300 + 2F-140 (either part '
+                    'optional) for simulators and libraries that do not read xacro or ROS '
+                    'packages. Mesh paths stay package:// URIs unless --absolute-meshes is given. '
+                    'Errors are one line and exit with status 1; no file is written then.')
+    parser.add_argument('--ur-type', default='ur3',
+                        help='UR model, one of %s (default: ur3)' % ', '.join(description.ur_types()))
+    parser.add_argument('--prefix', default='', help='prefix for every link and joint, e.g. left_')
+    parser.add_argument('--no-ft-sensor', action='store_true',
+                        help='leave out the FT 300; the gripper then sits on tool0 through the coupling')
+    parser.add_argument('--no-gripper', action='store_true', help='leave out the 2F-140')
+    parser.add_argument('--world', action='store_true', help='root the model at a world link')
+    for arg, what in (('joint-limit-params', 'joint limits'),
+                      ('kinematics-params', 'kinematic calibration (use your robot\'s own)'),
+                      ('physical-params', 'physical parameters'), ('visual-params', 'meshes')):
+        parser.add_argument('--' + arg, default='', metavar='YAML',
+                            help="YAML file with the arm's %s (default: ur_description's file for "
+                                 "--ur-type)" % what)
+    parser.add_argument('--absolute-meshes', action='store_true',
+                        help='write mesh paths as absolute file:// URIs instead of package:// URIs')
+    parser.add_argument('-o', '--output', help='write the URDF to this file instead of stdout')
+    args = parser.parse_args(argv)
+    mappings = export.model_mappings(
+        ur_type=args.ur_type, prefix=args.prefix, ft_sensor=not args.no_ft_sensor,
+        gripper=not args.no_gripper, world=args.world,
+        joint_limit_params=args.joint_limit_params, kinematics_params=args.kinematics_params,
+        physical_params=args.physical_params, visual_params=args.visual_params)
+    try:
+        text = export.export_urdf(mappings, absolute=args.absolute_meshes)
+        if args.output:
+            with open(args.output, 'w') as f:
+                f.write(text)
+        else:
+            sys.stdout.write(text)
+    except description.DescriptionError as e:
+        message = str(e)
+        for name in description.PARAMETER_FILE_ARGS:  # name the fix in this command's syntax
+            message = message.replace('%s:=' % name, '--%s ' % name.replace('_', '-'))
+        print('export_urdf: error: %s' % message, file=sys.stderr)
+        return 1
+    except OSError as e:
+        print('export_urdf: error: %s' % e, file=sys.stderr)
+        return 1
+    return 0

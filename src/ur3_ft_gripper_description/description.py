@@ -43,6 +43,10 @@ PARAMETER_FILE_ARGS = {
 }
 
 
+# Top-level xacro args that must be true or false.
+BOOLEAN_ARGS = ('ft_sensor', 'gripper', 'world', 'safety_limits')
+BOOLEAN_VALUES = ('true', 'false', 'True', 'False', '1', '0')
+
 # A TF frame name: segments of letters, digits and '_', separated by '/'.
 FRAME_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$')
 
@@ -67,6 +71,26 @@ def check_prefix(prefix):
         raise DescriptionError(
             "prefix %r cannot start a TF frame name: use letters, digits, '_' and '/' "
             "(not first), e.g. prefix:=left_ or prefix:=robot1/" % prefix)
+
+
+def ur_types():
+    """The UR models the package accepts (config/ur_types.yaml, shared with the macro)."""
+    path = os.path.join(package_path('ur3_ft_gripper_description'), 'config', 'ur_types.yaml')
+    with open(path) as f:
+        return list(yaml.safe_load(f)['ur_types'])
+
+
+def check_ur_type(ur_type):
+    valid = ur_types()
+    if ur_type not in valid:
+        raise DescriptionError("ur_type %r is not a UR model that ur_description ships: use one of %s"
+                               % (ur_type, ', '.join(valid)))
+
+
+def check_boolean(arg, value):
+    if str(value) not in BOOLEAN_VALUES:
+        raise DescriptionError('%s:=%r is not a boolean: use %s:=true or %s:=false' % (
+            arg, value, arg, arg))
 
 
 def _rospack():
@@ -270,8 +294,14 @@ def expand(xacro_file, mappings=None):
 
 
 def expand_model(mappings=None, xacro_file=None):
-    """The package's own top-level model, with the upstream packages checked first."""
+    """The package's own top-level model, with the upstream packages and its args checked first."""
     check_model_packages()
+    mappings = dict(mappings or {})
+    if 'ur_type' in mappings:
+        check_ur_type(mappings['ur_type'])
+    for arg in BOOLEAN_ARGS:
+        if arg in mappings:
+            check_boolean(arg, mappings[arg])
     if xacro_file is None:
         xacro_file = os.path.join(package_path('ur3_ft_gripper_description'),
                                   'urdf', 'ur3_ft_gripper.xacro')

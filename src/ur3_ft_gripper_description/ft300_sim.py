@@ -13,6 +13,7 @@ Private parameters (defaults from config/sim_devices.yaml):
   ~rate            100 Hz (the real sensor's stream rate)
   ~noise_force     0.1 N, ~noise_torque 0.005 Nm (standard deviations; 0 = none)
   ~payload_mass    0 kg ; ~payload_com [0, 0, 0] m in the sensor frame: a held object
+  ~gripper_mounted true ; false: the model has no 2F-140, only ~payload hangs on the sensor
   ~devices_file    config/sim_devices.yaml (mass model of the gripper)
   ~max_pose_age    0.5 s ; a pose older than this is stale (robot_state_publisher
                    stopped?): no wrench is published until it is fresh again
@@ -52,6 +53,11 @@ class FT300Settings(object):
         prefix = get_param('~prefix', '')
         if not isinstance(prefix, str):
             raise sim_params.ParamError('~prefix=%r must be a string' % (prefix,))
+        mounted = get_param('~gripper_mounted', True)
+        if not isinstance(mounted, bool):
+            raise sim_params.ParamError('~gripper_mounted=%r must be true or false' % (mounted,))
+        if not mounted:
+            gripper = dataclasses.replace(gripper, mass=0.0, com=[0.0, 0.0, 0.0])
         object_mass = sim_params.number(get_param, '~payload_mass', 0.0, minimum=0.0)
         object_com = sim_params.vector3(get_param, '~payload_com', [0.0, 0.0, 0.0])
         return cls(

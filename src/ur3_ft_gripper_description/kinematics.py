@@ -145,3 +145,12 @@ class Model(object):
     def transform(self, from_link, to_link, positions=None):
         """Pose of `to_link` in `from_link` (what tf2 lookup_transform(from, to) returns)."""
         return np.linalg.inv(self.to_root(from_link, positions)).dot(self.to_root(to_link, positions))
+
+
+def matrix_rpy(rotation):
+    """URDF roll, pitch, yaw of a rotation matrix (inverse of rpy_matrix, pitch in [-pi/2, pi/2])."""
+    r = np.asarray(rotation, dtype=float)
+    pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
+    if np.hypot(r[0, 0], r[1, 0]) < 1e-12:  # gimbal lock: put it all in roll
+        return float(np.arctan2(-r[1, 2], r[1, 1])), float(pitch), 0.0
+    return (float(np.arctan2(r[2, 1], r[2, 2])), float(pitch), float(np.arctan2(r[1, 0], r[0, 0])))

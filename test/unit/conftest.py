@@ -1,4 +1,6 @@
 """Shared helpers: expand the real model (real xacro, upstream packages on ROS_PACKAGE_PATH)."""
+import functools
+import itertools
 import os
 import subprocess
 import sys
@@ -11,7 +13,19 @@ from ur3_ft_gripper_description import description, kinematics
 PACKAGE = 'ur3_ft_gripper_description'
 PACKAGE_DIR = rospkg.RosPack().get_path(PACKAGE)
 UR_CONFIG = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config', 'ur3')
+UR_CONFIG_ROOT = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config')
 EXPAND = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'expand_description')]
+EXPORT = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_urdf')]
+
+# Every model and toggle combination the package offers (issue 4).
+UR_TYPES = description.ur_types()
+TOGGLES = [dict(ft_sensor=s, gripper=g) for s, g in itertools.product((True, False), repeat=2)]
+CONFIGURATIONS = [dict(ur_type=u, **t) for u in UR_TYPES for t in TOGGLES]
+
+
+def configuration_id(config):
+    return '%s-%s-%s' % (config['ur_type'], 'ft' if config['ft_sensor'] else 'noft',
+                         'gripper' if config['gripper'] else 'nogripper')
 
 
 class ExpandedModel(kinematics.Model):
@@ -37,6 +51,19 @@ def expand_model():
     return expand
 
 
+@functools.lru_cache(maxsize=None)
+def _configured(ur_type, ft_sensor, gripper, prefix=''):
+    mappings = dict(ur_type=ur_type, ft_sensor=str(ft_sensor).lower(), gripper=str(gripper).lower(),
+                    prefix=prefix)
+    return ExpandedModel(description.to_xml(description.expand_model(mappings)))
+
+
+@pytest.fixture(scope='session')
+def configured_model():
+    """Expands each (ur_type, ft_sensor, gripper[, prefix]) once per test session."""
+    return _configured
+
+
 @pytest.fixture(scope='session')
 def default_model():
     return ExpandedModel(description.to_xml(description.expand_model({})))
@@ -46,6 +73,11 @@ def robotiq_variant():
     """'noetic' (jr-robotics fork) or 'kinetic' (ros-industrial), from the files present."""
     urdf = os.path.join(rospkg.RosPack().get_path('robotiq_2f_140_gripper_visualization'), 'urdf')
     return 'noetic' if os.path.exists(os.path.join(urdf, 'robotiq_arg2f_140_macro.xacro')) else 'kinetic'
+
+
+def run_export(*args, env=None):
+    return subprocess.run(EXPORT + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          universal_newlines=True, env=env, timeout=120)
 
 
 def run_expand(*args, env=None):

@@ -45,7 +45,17 @@ def test_ft300_held_object_is_added_to_the_gripper():
     assert settings.payload.com == pytest.approx([0.0, 0.0, expected_z])
 
 
+def test_ft300_without_gripper_carries_only_the_held_object():
+    settings = ft300_sim.FT300Settings.from_params(params(gripper_mounted=False))
+    assert settings.payload.mass == 0.0
+    settings = ft300_sim.FT300Settings.from_params(
+        params(gripper_mounted=False, payload_mass=0.3, payload_com=[0, 0, 0.1]))
+    assert settings.payload.mass == pytest.approx(0.3)
+    assert settings.payload.com == pytest.approx([0, 0, 0.1])
+
+
 @pytest.mark.parametrize('values, named', [
+    (dict(gripper_mounted='no'), '~gripper_mounted'),
     (dict(rate=0), '~rate'),
     (dict(rate='fast'), '~rate'),
     (dict(noise_force=-0.1), '~noise_force'),
