@@ -114,17 +114,21 @@ def _bad_launch_args(case, tmp_path):
         return ['kinematics_params:=%s' % kinematics_without(tmp_path, 'forearm')], ['forearm']
     if case == 'bad prefix':
         return ['prefix:=arm-1_'], ['prefix', 'TF frame']
+    if case == 'unknown ur_type':
+        return ['ur_type:=ur4'], ["ur_type 'ur4'", 'ur3, ur3e']
     raise ValueError(case)
 
 
-@pytest.mark.parametrize('case', ['missing file', 'empty file', 'malformed file', 'joint missing', 'bad prefix'])
+@pytest.mark.parametrize('case', ['missing file', 'empty file', 'malformed file', 'joint missing', 'bad prefix',
+                                  'unknown ur_type'])
 def test_load_launch_with_bad_input_stops_before_setting_anything(case, tmp_path):
     # A real roslaunch (not --dump-params, which exits 0 on errors) on an unused
     # master port: it must stop while loading, before it starts a master or sets
     # a parameter (no half-loaded model), with the one error line and no traceback.
     args, words = _bad_launch_args(case, tmp_path)
     env = dict(os.environ, ROS_MASTER_URI='http://localhost:11391')
-    run = subprocess.run(['roslaunch', 'ur3_ft_gripper_description', 'load_ur3_ft_gripper.launch'] + args,
+    launch = 'load_ur_ft_gripper.launch' if case == 'unknown ur_type' else 'load_ur3_ft_gripper.launch'
+    run = subprocess.run(['roslaunch', 'ur3_ft_gripper_description', launch] + args,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
                          env=env, timeout=120)
     assert run.returncode == 1
