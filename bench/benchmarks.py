@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Benchmarks of this package side by side with upstream ur_description, in one run.
 
-    bench/benchmarks.py [--short] [--output bench/RESULTS.md]
+    python3 bench/benchmarks.py [--short] [--output bench/RESULTS.md]
 
 Prints the tables and ratios and writes them into the "bench" section of
 RESULTS.md with the machine, date and load. `tools/quickstart bench` runs it

@@ -3,7 +3,7 @@
 gripper commands at 10 Hz; checks that the nodes' resident memory does not grow and
 the wrench stream has no gap.
 
-    bench/soak.py [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
+    python3 bench/soak.py [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
 
 Limits (issue 5): resident memory of ft300_sim and gripper_sim grows by at most
 5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
