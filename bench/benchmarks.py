@@ -4,7 +4,8 @@
     python3 bench/benchmarks.py [--short] [--output bench/RESULTS.md]
 
 Prints the tables and ratios and writes them into the "bench" section of
-RESULTS.md with the machine, date and load. `tools/quickstart bench` runs it
+RESULTS.md (one section per robotiq variant) with the machine, date and load.
+`bash bench/run` (= `tools/quickstart bench`; UR3_FT_GRIPPER_ROBOTIQ=kinetic for the other variant) runs it
 in the workspace. Measurements, not pass/fail: the exit status is 0 when every
 benchmark ran. --short runs each a few times only (CI keeps the script working).
 """
@@ -376,7 +377,10 @@ def main(argv=None):
     results['load_after'] = benchlib.load_average()
     text = report(results)
     print(text)
-    benchlib.replace_section(args.output, 'bench', text)
+    # One section per robotiq variant: with robotiq-kinetic the plain-xacro bring-up row exists too.
+    benchlib.replace_section(args.output, 'bench robotiq-%s' % results['variant'],
+                             '## Benchmarks with robotiq-%s (`bash bench/run%s`)\n\n%s' % (
+                                 results['variant'], ' --short' if args.short else '', text))
     say('written to %s' % args.output)
     return 0
 
