@@ -23,6 +23,42 @@ import benchlib  # noqa: E402
 
 RSS_LIMIT_MB = 5.0
 GAP_LIMIT_S = 0.050
+LONG_GAP_S = 0.040  # gaps and stalls longer than this are listed for the diagnosis
+
+
+class StallWatch(object):
+    """This process oversleeping a 5 ms sleep by more than LONG_GAP_S: the machine, not a node, stalled."""
+
+    def __init__(self):
+        self.stalls = []  # (woke, overslept)
+        threading.Thread(target=self._run, daemon=True).start()
+
+    def _run(self):
+        while True:
+            before = time.monotonic()
+            time.sleep(0.005)
+            woke = time.monotonic()
+            if woke - before - 0.005 > LONG_GAP_S:
+                self.stalls.append((woke, woke - before - 0.005))
+
+
+def machine_counters():
+    """(CPU steal seconds, major page faults) so far, from /proc."""
+    with open('/proc/stat') as f:
+        steal = int(f.readline().split()[8]) / float(benchlib.CLK_TCK)
+    with open('/proc/vmstat') as f:
+        faults = next(int(line.split()[1]) for line in f if line.startswith('pgmajfault '))
+    return steal, faults
+
+
+def explained(gaps, *others, slack=0.2):
+    """How many of `gaps` overlap an entry of the other lists (same time, +/- slack s)."""
+    count = 0
+    for t, length in gaps:
+        start = t - length - slack
+        if any(start <= u <= t + slack for other in others for u, _ in other):
+            count += 1
+    return count
 
 
 class Stream(object):
@@ -35,6 +71,7 @@ class Stream(object):
         self.last = None
         self.max_stamp_gap = self.max_receipt_gap = 0.0
         self.latest = None
+        self.long_gaps = []  # (received, stamp gap) of gaps over LONG_GAP_S, for the diagnosis
 
     def add(self, msg):
         received = time.monotonic()
@@ -44,6 +81,8 @@ class Stream(object):
             if self.counting and self.last is not None:
                 self.count += 1
                 self.max_stamp_gap = max(self.max_stamp_gap, stamp - self.last[0])
+                if stamp - self.last[0] > LONG_GAP_S:
+                    self.long_gaps.append((received, stamp - self.last[0]))
                 self.max_receipt_gap = max(self.max_receipt_gap, received - self.last[1])
             self.last = (stamp, received)
 
@@ -89,6 +128,7 @@ def main(argv=None):
                           60, 'the wrench, the gripper and its command subscriber')
         pids = {name: benchlib.node_pid('/' + name) for name in ('ft300_sim', 'gripper_sim')}
 
+        stalls = StallWatch()
         start = time.monotonic()
         rss_at_warmup, rss_max, sent = {}, {}, 0
         target = 0.140
@@ -103,6 +143,8 @@ def main(argv=None):
                 wrench.start_counting()
                 joints.start_counting()
                 rss_at_warmup = {n: benchlib.rss_mb(p) for n, p in pids.items()}
+                counters_at_warmup = machine_counters()
+                stalls.stalls = []
                 rss_max = dict(rss_at_warmup)
             if rss_at_warmup and sent % 50 == 0:
                 for n, p in pids.items():
@@ -110,6 +152,7 @@ def main(argv=None):
             rate.sleep()
         wrench.stop_counting()
         joints.stop_counting()
+        steal, faults = (b - a for a, b in zip(counters_at_warmup, machine_counters()))
         rss_end = {n: benchlib.rss_mb(p) for n, p in pids.items()}
         for n in pids:
             rss_max[n] = max(rss_max[n], rss_end[n])
@@ -141,6 +184,12 @@ def main(argv=None):
     for n in sorted(pids):
         rows.append('| %s resident memory: after warm-up, max, end, growth | %.1f, %.1f, %.1f MB, +%.2f MB '
                     '(limit %g MB) |' % (n, rss_at_warmup[n], rss_max[n], rss_end[n], growth[n], RSS_LIMIT_MB))
+    over = [g for g in wrench.long_gaps if g[1] > gap_limit]
+    rows.append('| wrench gaps over the limit / of them while the gripper or this process also stalled | '
+                '%d / %d |' % (len(over), explained(over, joints.long_gaps, stalls.stalls)))
+    rows.append('| this process oversleeping 5 ms by > %g ms (machine stalls) / longest | %d / %.0f ms |' % (
+        1e3 * LONG_GAP_S, len(stalls.stalls), 1e3 * max([d for _, d in stalls.stalls] or [0.0])))
+    rows.append('| machine during the measurement: CPU steal, major page faults | %.1f s, %d |' % (steal, faults))
     rows.append('| gripper follows the last command | %s |' % (
         'yes' if abs(opening - round(target, 6)) <= 1e-9 else 'no (%.4f m)' % opening))
     verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems)
