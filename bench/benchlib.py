@@ -52,8 +52,12 @@ def wait_for(condition, timeout, what, step=0.01):
     raise RuntimeError('timed out after %g s waiting for %s' % (timeout, what))
 
 
-def stop(process, timeout=15):
-    """SIGINT (what roslaunch and rospy expect), then SIGKILL if it does not go."""
+def stop(process, timeout=30):
+    """SIGINT (what roslaunch and rospy expect), then SIGKILL if it does not go.
+
+    30 s: roslaunch itself gives a node 15 s after SIGINT, then SIGTERM, then
+    SIGKILL; killing roslaunch sooner left a node that hung in shutdown orphaned.
+    """
     if process is None or process.poll() is not None:
         return
     process.send_signal(signal.SIGINT)
