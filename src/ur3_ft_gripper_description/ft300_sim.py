@@ -23,13 +23,12 @@ never publishes a wrench for a pose it does not know.
 """
 
 import dataclasses
-import gc
 import math
 import threading
 
 import numpy as np
 
-from ur3_ft_gripper_description import master_watch, sim_params, wrench_model
+from ur3_ft_gripper_description import node_loop, sim_params, wrench_model
 
 
 @dataclasses.dataclass
@@ -224,18 +223,13 @@ def run(rospy):
                                'to zero' % (settings.gravity_frame, settings.frame_id))
 
     rospy.Service('robotiq_ft_zero', Trigger, zero)
-    master = master_watch.start(rospy)
-    # Everything made so far (modules, message classes, the model) lives as long as
-    # the node: out of the collector's reach, a full collection no longer stops
-    # the loop for ~20 ms (more on a loaded machine), which showed as wrench gaps.
-    gc.freeze()
-    rate = rospy.Rate(settings.rate)
     latest = rospy.Time(0)
     # One message, refilled each cycle: publish() serializes it before returning.
     message = WrenchStamped()
     message.header.frame_id = settings.frame_id
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
-    while not rospy.is_shutdown():
+
+    def step():
         now = rospy.Time.now()
         try:
             # lookup_transform() without a timeout is can_transform() + this call.
@@ -243,21 +237,16 @@ def run(rospy):
                                                       latest)
         except tf2_ros.TransformException as exc:
             watch.missing(str(exc).strip() or type(exc).__name__, now.to_sec())
-        else:
-            if watch.fresh(stamped.header.stamp.to_sec(), now.to_sec()):
-                q = stamped.transform.rotation
-                force, torque = sensor.read_quaternion(q.x, q.y, q.z, q.w)
-                message.header.stamp = now
-                force_msg.x, force_msg.y, force_msg.z = force
-                torque_msg.x, torque_msg.y, torque_msg.z = torque
-                publisher.publish(message)
-        try:
-            rate.sleep()
-        except rospy.ROSTimeMovedBackwardsException:
-            tf_buffer.clear()
-        except rospy.ROSInterruptException:
-            break
-    return master.exit_status
+            return
+        if watch.fresh(stamped.header.stamp.to_sec(), now.to_sec()):
+            q = stamped.transform.rotation
+            force, torque = sensor.read_quaternion(q.x, q.y, q.z, q.w)
+            message.header.stamp = now
+            force_msg.x, force_msg.y, force_msg.z = force
+            torque_msg.x, torque_msg.y, torque_msg.z = torque
+            publisher.publish(message)
+
+    return node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=tf_buffer.clear)
 
 
 def main():

@@ -28,11 +28,10 @@ Private parameters (defaults from config/sim_devices.yaml):
   ~devices_file      config/sim_devices.yaml
 """
 
-import gc
 import math
 import time
 
-from ur3_ft_gripper_description import gripper_model, master_watch, sim_params
+from ur3_ft_gripper_description import gripper_model, node_loop, sim_params
 
 # Fine enough that the interpolated angle is within 1e-6 rad of the exact
 # inverse (test_sim_models checks it), cheap enough to build at start-up.
@@ -152,35 +151,26 @@ def run(rospy):
     def angle_of(opening):
         return fingers.table_angle(fingers.command_to_opening(opening))
 
-    master = master_watch.start(rospy)
-    # Everything made so far (modules, message classes, the model) lives as long as
-    # the node: out of the collector's reach, a full collection no longer stops
-    # the loop for ~20 ms (more on a loaded machine), which showed as wrench gaps.
-    gc.freeze()
-    rate = rospy.Rate(settings['rate'])
-    last_time = rospy.Time.now()
-    last_angle = angle_of(state.opening)
-    while not rospy.is_shutdown():
+    clock = {'time': rospy.Time.now(), 'angle': angle_of(state.opening)}
+
+    def step():
         now = rospy.Time.now()
-        dt = (now - last_time).to_sec()
-        last_time = now
+        dt = (now - clock['time']).to_sec()
         opening = state.advance(dt)
         angle = angle_of(opening)
         joint_state = JointState()
         joint_state.header.stamp = now
         joint_state.name = [fingers.joint_name]
         joint_state.position = [angle]
-        joint_state.velocity = [(angle - last_angle) / dt if dt > 0 else 0.0]
-        last_angle = angle
+        joint_state.velocity = [(angle - clock['angle']) / dt if dt > 0 else 0.0]
+        clock['time'], clock['angle'] = now, angle
         joint_publisher.publish(joint_state)
         opening_publisher.publish(Float64(opening))
-        try:
-            rate.sleep()
-        except rospy.ROSTimeMovedBackwardsException:
-            last_time = rospy.Time.now()
-        except rospy.ROSInterruptException:
-            break
-    return master.exit_status
+
+    def restart_clock():
+        clock['time'] = rospy.Time.now()
+
+    return node_loop.run_at_rate(rospy, settings['rate'], step, on_time_jump=restart_clock)
 
 
 def main():
