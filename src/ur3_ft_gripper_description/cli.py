@@ -18,6 +18,15 @@ def _split_mappings(parser, words):
     return mappings
 
 
+def _write(text, output):
+    """`text` to the file `output`, or to stdout when no -o was given."""
+    if output:
+        with open(output, 'w') as f:
+            f.write(text)
+    else:
+        sys.stdout.write(text)
+
+
 def expand_description_main(argv=None):
     parser = argparse.ArgumentParser(
         prog='expand_description',
@@ -38,12 +47,7 @@ def expand_description_main(argv=None):
             doc = description.expand(args.input, mappings)
         else:
             doc = description.expand_model(mappings)
-        text = description.to_xml(doc)
-        if args.output:
-            with open(args.output, 'w') as f:
-                f.write(text)
-        else:
-            sys.stdout.write(text)
+        _write(description.to_xml(doc), args.output)
     except description.DescriptionError as e:
         print('expand_description: error: %s' % e, file=sys.stderr)
         return 1
@@ -97,12 +101,7 @@ def export_urdf_main(argv=None):
         joint_limit_params=args.joint_limit_params, kinematics_params=args.kinematics_params,
         physical_params=args.physical_params, visual_params=args.visual_params)
     try:
-        text = export.export_urdf(mappings, absolute=args.absolute_meshes)
-        if args.output:
-            with open(args.output, 'w') as f:
-                f.write(text)
-        else:
-            sys.stdout.write(text)
+        _write(export.export_urdf(mappings, absolute=args.absolute_meshes), args.output)
     except description.DescriptionError as e:
         message = str(e)
         for name in description.PARAMETER_FILE_ARGS:  # name the fix in this command's syntax

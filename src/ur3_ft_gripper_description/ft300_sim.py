@@ -44,15 +44,8 @@ class FT300Settings(object):
     @classmethod
     def from_params(cls, get_param):
         """Settings from private parameters (``get_param(name, default)``); ParamError if bad."""
-        devices_file = sim_params.existing_file(get_param, '~devices_file',
-                                                sim_params.default_devices_file())
-        try:
-            gripper = wrench_model.load_payload(devices_file)
-        except (OSError, ValueError) as exc:
-            raise sim_params.ParamError('~devices_file: %s' % exc)
-        prefix = get_param('~prefix', '')
-        if not isinstance(prefix, str):
-            raise sim_params.ParamError('~prefix=%r must be a string' % (prefix,))
+        gripper = sim_params.from_devices_file(get_param, wrench_model.load_payload)
+        prefix = sim_params.prefix(get_param)
         mounted = get_param('~gripper_mounted', True)
         if not isinstance(mounted, bool):
             raise sim_params.ParamError('~gripper_mounted=%r must be true or false' % (mounted,))

@@ -93,14 +93,8 @@ class GripperState(object):
 
 def settings_from_params(get_param):
     """(prefix, rate, speed, stroke, initial_opening, warnings) from private parameters."""
-    devices_file = sim_params.existing_file(get_param, '~devices_file', sim_params.default_devices_file())
-    try:
-        spec = gripper_model.load_gripper_spec(devices_file)
-    except (OSError, ValueError) as exc:
-        raise sim_params.ParamError('~devices_file: %s' % exc)
-    prefix = get_param('~prefix', '')
-    if not isinstance(prefix, str):
-        raise sim_params.ParamError('~prefix=%r must be a string' % (prefix,))
+    spec = sim_params.from_devices_file(get_param, gripper_model.load_gripper_spec)
+    prefix = sim_params.prefix(get_param)
     stroke = spec['stroke']
     speed = sim_params.number(get_param, '~speed', spec.get('max_speed', 0.25), strictly_above=0.0)
     initial = sim_params.number(get_param, '~initial_opening', stroke, minimum=0.0)

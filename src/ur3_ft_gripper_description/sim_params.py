@@ -69,3 +69,20 @@ def existing_file(get_param, name, default):
     if not isinstance(path, str) or not os.path.isfile(path):
         raise ParamError('%s=%r: no such file' % (name, path))
     return path
+
+
+def prefix(get_param):
+    """~prefix: the model's link/joint prefix, '' by default."""
+    value = get_param('~prefix', '')
+    if not isinstance(value, str):
+        raise ParamError('~prefix=%r must be a string' % (value,))
+    return value
+
+
+def from_devices_file(get_param, load):
+    """`load(path)` of ~devices_file (default config/sim_devices.yaml), its errors as ParamError."""
+    path = existing_file(get_param, '~devices_file', default_devices_file())
+    try:
+        return load(path)
+    except (OSError, ValueError) as exc:
+        raise ParamError('~devices_file: %s' % exc)
