@@ -19,12 +19,12 @@ import yaml
 # Package -> how a user gets it; used in "package not found" errors.
 PACKAGE_SOURCES = {
     'ur_description': 'sudo apt install ros-noetic-ur-description, or clone '
-                      'ros-industrial/universal_robot (see ur3_ft_gripper_description.repos)',
+                      'ros-industrial/universal_robot (see repos/robotiq-noetic.repos)',
     'robotiq_ft_sensor': 'clone ros-industrial/robotiq or jr-robotics/robotiq into your '
-                         'catkin workspace (see ur3_ft_gripper_description.repos)',
+                         'catkin workspace (see repos/robotiq-noetic.repos)',
     'robotiq_2f_140_gripper_visualization': 'clone ros-industrial/robotiq or jr-robotics/robotiq '
                                             'into your catkin workspace '
-                                            '(see ur3_ft_gripper_description.repos)',
+                                            '(see repos/robotiq-noetic.repos)',
 }
 MODEL_PACKAGES = ('ur_description', 'robotiq_ft_sensor', 'robotiq_2f_140_gripper_visualization')
 
@@ -152,25 +152,17 @@ def check_parameter_file(arg, path):
 
 
 def load_xacro():
-    """Import xacro, making `$(find pkg)` use ROS_PACKAGE_PATH (ROS 1)."""
+    """The ROS 1 xacro module; its `$(find pkg)` goes through roslaunch and ROS_PACKAGE_PATH."""
     try:
         import xacro
-        from xacro import substitution_args
     except ImportError:
         raise DescriptionError(
-            'xacro is not installed: sudo apt install ros-noetic-xacro (ROS Noetic), '
-            "or pip install 'xacro>=2' into a venv made with --system-site-packages") from None
+            'xacro is not installed: sudo apt install ros-noetic-xacro, or build ros/xacro '
+            '(noetic-devel) in your catkin workspace and source it') from None
     if not hasattr(xacro, 'load_yaml'):
         raise DescriptionError(
-            'xacro %s is too old (no xacro.load_yaml, which ur_description needs): '
-            "install ros-noetic-xacro or pip install 'xacro>=2'" % getattr(xacro, '__version__', ''))
-    # xacro 2 from PyPI resolves $(find) through ament (ROS 2) only.
-    if hasattr(substitution_args, '_eval_find'):
-        def find(pkg):
-            return package_path(pkg)
-        substitution_args._eval_find = find
-        if hasattr(substitution_args, '_eval_dict'):
-            substitution_args._eval_dict['find'] = find
+            'this xacro has no xacro.load_yaml, which ur_description needs: install '
+            'ros-noetic-xacro >= 1.14.10')
     return xacro
 
 
