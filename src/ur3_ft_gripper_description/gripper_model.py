@@ -79,6 +79,20 @@ def _pad_thickness(link_element):
     return None
 
 
+def pad_gap(left, right, box):
+    """Gap between the inner faces of two pads with poses `left`, `right` (4x4) and box size `box`.
+
+    The pad normal is the pad axis best aligned with the line between the
+    pads' centres; the gap is the centres' distance along it, less one pad
+    thickness (half of each pad's box along that axis).
+    """
+    centres = right[:3, 3] - left[:3, 3]
+    axes = left[:3, :3]
+    k = int(np.argmax(np.abs(axes.T.dot(centres))))
+    normal = axes[:, k] * np.sign(axes[:, k].dot(centres))
+    return float(normal.dot(centres) - box[k])
+
+
 class GripperKinematics(object):
     """Gap between the finger pads as a function of ``finger_joint`` and back.
 
@@ -128,7 +142,7 @@ class GripperKinematics(object):
                 raise ValueError("the model has no link '%s'" % (prefix + pad))
             self._chains.append(self.model.chain(base, prefix + pad))
         box = _pad_thickness(self.model.link_elements[prefix + PADS[0]])
-        self._box = np.asarray(box if box else (0.0, 0.0, 0.0), dtype=float)
+        self.pad_thickness = tuple(box) if box else (0.0, 0.0, 0.0)
         self.angles = np.linspace(self.lower, self.upper, int(samples))
         self.openings = np.array([self.opening_exact(a) for a in self.angles])
         if not np.all(np.diff(self.openings) < 0):
@@ -145,12 +159,7 @@ class GripperKinematics(object):
     def opening_exact(self, angle):
         """Gap between the pads' inner faces at `angle`, from forward kinematics."""
         left, right = self.pad_poses(angle)
-        centres = right[:3, 3] - left[:3, 3]
-        axes = left[:3, :3]
-        # The pad normal is the pad axis best aligned with the line between the pads.
-        k = int(np.argmax(np.abs(axes.T.dot(centres))))
-        normal = axes[:, k] * np.sign(axes[:, k].dot(centres))
-        return float(normal.dot(centres) - self._box[k])
+        return pad_gap(left, right, self.pad_thickness)
 
     # -- public mapping ------------------------------------------------------
 
