@@ -8,6 +8,7 @@ roslaunch itself (the command line and its XmlLoader), with no master.
 """
 import os
 import subprocess
+import xml.dom.minidom
 
 import numpy as np
 import pytest
@@ -191,6 +192,19 @@ def test_sim_replaces_the_devices_under_the_same_names():
     arm = kinematics.Model(params['/arm_joint_state_publisher/robot_description'])
     assert 'finger_joint' not in arm.joints and 'wrist_3_joint' in arm.joints
     assert 'finger_joint' in kinematics.Model(params['/robot_description']).joints
+
+
+@pytest.mark.parametrize('launch_file, required', [
+    ('ur_ft_gripper_bringup.launch', {'ur_type', 'robot_ip', 'ft_serial_id', 'gripper_device'}),
+    ('ur3_ft_gripper_bringup.launch', {'robot_ip', 'ft_serial_id', 'gripper_device'}),
+])
+def test_every_arg_has_doc_and_the_required_ones_no_default(launch_file, required):
+    root = xml.dom.minidom.parse(os.path.join(LAUNCH, launch_file)).documentElement
+    args = [a for a in root.getElementsByTagName('arg') if a.parentNode is root]
+    for arg in args:
+        assert arg.getAttribute('doc').strip(), arg.toxml()
+    unset = {a.getAttribute('name') for a in args if not a.hasAttribute('default') and not a.hasAttribute('value')}
+    assert unset == required
 
 
 def roslaunch_run(*command, env=None):
