@@ -172,6 +172,16 @@ def test_real_cell_tcp_with_prefix_and_calibration(tmp_path):
     assert_joint_states_meet(nodes)
 
 
+def test_real_cell_default_calibration_is_the_ur_types():
+    nodes, params = load_nodes('ur_ft_gripper_bringup.launch', 'ur_type:=ur10e', 'gripper_device:=/dev/ttyUSB1',
+                               *REAL_ARGS)
+    default = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config', 'ur10e',
+                           'default_kinematics.yaml')
+    with open(default) as f:
+        calib = yaml.safe_load(f)['kinematics']
+    assert_cell_model(params, calib)
+
+
 def test_real_cell_without_the_gripper():
     nodes, params = load_nodes('ur3_ft_gripper_bringup.launch', 'gripper:=false', *REAL_ARGS)
     assert kinds(nodes) == dict(UR_DRIVER_NODES, **FT_DRIVER)
