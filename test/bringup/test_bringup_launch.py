@@ -158,13 +158,15 @@ def test_real_cell_tcp_with_prefix_and_calibration(tmp_path):
     path, calib = calibration(tmp_path, 'ur5e')
     nodes, params = load_nodes('ur_ft_gripper_bringup.launch', 'ur_type:=ur5e', 'prefix:=cell_',
                                'kinematics_config:=' + path, 'gripper_ip:=192.168.1.11',
-                               'gripper_gpo_open:=4', 'gripper_gpo_closed:=227', *REAL_ARGS)
+                               'gripper_gpo_open:=4', 'gripper_gpo_closed:=227', 'headless_mode:=true',
+                               *REAL_ARGS)
     assert kinds(nodes) == dict(UR_DRIVER_NODES, **FT_DRIVER, **TCP, **GRIPPER_JOINT_STATES)
     assert nodes['/robotiq2FGripper'].args == '192.168.1.11'
     assert params['/robotiq_ft_sensor/frame_id'] == 'cell_robotiq_ft_frame_id'
     assert params['/gripper_joint_states/prefix'] == 'cell_'
     assert (params['/gripper_joint_states/gpo_open'], params['/gripper_joint_states/gpo_closed']) == (4, 227)
     assert params['/ur_hardware_interface/tf_prefix'] == 'cell_'
+    assert params['/ur_hardware_interface/headless_mode'] is True
     # ur5e's own controller configuration from ur_robot_driver.
     assert params['/ur_hardware_interface/joints'] == ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
                                                        'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint']
