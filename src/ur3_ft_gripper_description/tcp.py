@@ -33,7 +33,7 @@ MAX_SPREAD = 2e-6
 def tcp_matrix(model, prefix=''):
     """4x4 pose of the TCP in the gripper base frame, from a kinematics.Model."""
     joint = model.joints[prefix + FINGER_JOINT]
-    closed = {joint.name: joint.upper}
+    closed = {joint.name: joint.limit.upper}
     left, right = (model.transform(prefix + GRIPPER_BASE, prefix + pad, closed)[:3, 3] for pad in PADS)
     centre = (left + right) / 2.0
     z = centre / np.linalg.norm(centre)
