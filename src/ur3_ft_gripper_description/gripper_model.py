@@ -11,9 +11,8 @@ import numpy as np
 import yaml
 
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.description import FINGER_JOINT, PADS
 
-FINGER_JOINT = 'finger_joint'
-PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 
 
 def load_gripper_spec(path, keys=('stroke',)):
