@@ -29,8 +29,10 @@ PACKAGE_SOURCES = {
 }
 MODEL_PACKAGES = ('ur_description', 'robotiq_ft_sensor', 'robotiq_2f_140_gripper_visualization')
 
-# The gripper link that both robotiq layouts create; the fork's extra root sits above it.
+# Names both upstream 2F-140 macros give (before the prefix).
 GRIPPER_BASE = 'robotiq_arg2f_base_link'
+FINGER_JOINT = 'finger_joint'
+PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 
 # Top-level xacro args that name UR parameter files, with the keys the UR
 # macro reads from each (ur_description/urdf/inc/ur_common.xacro).
