@@ -91,8 +91,10 @@ def assert_cell_model(params, calib, prefix=''):
     assert model.joints[prefix + 'finger_joint'].type == 'revolute'
     for section, joint in ARM:
         c = calib[section]
-        expected = kinematics.transform((c['x'], c['y'], c['z']), (c['roll'], c['pitch'], c['yaw']))
-        np.testing.assert_allclose(model.joints[prefix + joint].origin, expected, atol=1e-9, err_msg=joint)
+        origin = model.joints[prefix + joint].origin
+        np.testing.assert_allclose(list(origin.xyz) + list(origin.rpy),
+                                   [c[k] for k in ('x', 'y', 'z', 'roll', 'pitch', 'yaw')], atol=1e-9,
+                                   err_msg=joint)
     # ur_robot_driver compares the robot's calibration with the same file.
     assert params['/ur_hardware_interface/kinematics/hash'] == calib['hash']
 
