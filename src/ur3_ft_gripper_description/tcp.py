@@ -20,10 +20,9 @@ differ by 1e-6 m and the mean is within 0.5e-6 m of either.
 import numpy as np
 
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.gripper_model import FINGER_JOINT, PADS
 
 GRIPPER_BASE = 'robotiq_arg2f_base_link'
-FINGER_JOINT = 'finger_joint'
-PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 TCP_LINK = 'gripper_tcp'
 YAML_KEY = 'gripper_tcp_in_gripper_base'
 KEYS = ('x', 'y', 'z', 'roll', 'pitch', 'yaw')

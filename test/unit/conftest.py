@@ -17,7 +17,7 @@ UR_CONFIG_ROOT = os.path.join(rospkg.RosPack().get_path('ur_description'), 'conf
 EXPAND = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'expand_description')]
 EXPORT = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_urdf')]
 
-# Every model and toggle combination the package offers (issue 4).
+# Every model and toggle combination the package offers.
 UR_TYPES = description.ur_types()
 TOGGLES = [dict(ft_sensor=s, gripper=g) for s, g in itertools.product((True, False), repeat=2)]
 CONFIGURATIONS = [dict(ur_type=u, **t) for u in UR_TYPES for t in TOGGLES]

@@ -87,6 +87,32 @@ def test_unknown_xacro_file():
     assert_one_line_error(run_expand('/nonexistent/cell.xacro'), 'xacro file not found')
 
 
+CELL = """<robot name="cell" xmlns:xacro="http://wiki.ros.org/xacro">
+  <xacro:include filename="$(find ur3_ft_gripper_description)/urdf/inc/ur3_ft_gripper_macro.xacro"/>
+  %s
+</robot>
+"""
+ONE_ROBOT = '<xacro:ur3_ft_gripper prefix="%s"/>'
+TREE_FAULTS = {
+    # A user's cell that calls the macro twice with one prefix.
+    'same prefix twice': (ONE_ROBOT % 'r1_' + ONE_ROBOT % 'r1_', ["'r1_base_link' is not unique", 'own prefix']),
+    # Two robots, nothing joining them.
+    'two roots': (ONE_ROBOT % 'r1_' + ONE_ROBOT % 'r2_', ['Two root links', 'one root link']),
+    'dangling joint': (ONE_ROBOT % '' + '<joint name="table_joint" type="fixed"><parent link="table"/>'
+                       '<child link="base_link"/></joint>', ['[table]', 'one root link']),
+    'not a frame name': (ONE_ROBOT % '' + '<link name="my cell"/><joint name="cell_joint" type="fixed">'
+                         '<parent link="my cell"/><child link="base_link"/></joint>', ['my cell', 'TF frame name']),
+}
+
+
+@pytest.mark.parametrize('fault', sorted(TREE_FAULTS))
+def test_cell_that_is_not_one_urdf_tree(fault, tmp_path):
+    body, words = TREE_FAULTS[fault]
+    cell = tmp_path / 'cell.xacro'
+    cell.write_text(CELL % body)
+    assert_one_line_error(run_expand(str(cell)), *words)
+
+
 def _dump_params(*args):
     return subprocess.run(['roslaunch', '--dump-params', 'ur3_ft_gripper_description',
                            'load_ur3_ft_gripper.launch'] + list(args),

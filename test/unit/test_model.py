@@ -171,7 +171,3 @@ def test_two_prefixed_robots_in_one_model(tmp_path):
     urdf.write_text(text)
     assert subprocess.run(['check_urdf', str(urdf)], stdout=subprocess.DEVNULL).returncode == 0
 
-
-def test_top_level_xacro_fits_on_one_screen():
-    with open(os.path.join(PACKAGE_DIR, 'urdf', 'ur3_ft_gripper.xacro')) as f:
-        assert len(f.read().splitlines()) <= 40
