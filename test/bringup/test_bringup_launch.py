@@ -224,7 +224,7 @@ def test_every_arg_has_doc_and_the_required_ones_no_default(launch_file, require
 def roslaunch_run(*command, env=None):
     """A real roslaunch on an unused master port: it must stop while loading."""
     env = dict(env or os.environ, ROS_MASTER_URI='http://localhost:11397')
-    return subprocess.run(['roslaunch', PACKAGE] + list(command), stdout=subprocess.PIPE,
+    return subprocess.run(['roslaunch'] + list(command), stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, universal_newlines=True, env=env, timeout=180)
 
 
@@ -233,35 +233,40 @@ def test_missing_required_arg_stops_roslaunch(missing):
     given = {'robot_ip': 'robot_ip:=192.168.56.101', 'ft_serial_id': 'ft_serial_id:=ttyUSB0',
              'gripper_device': 'gripper_device:=/dev/ttyUSB1'}
     del given[missing]
-    run = roslaunch_run('ur3_ft_gripper_bringup.launch', *given.values())
+    run = roslaunch_run(PACKAGE, 'ur3_ft_gripper_bringup.launch', *given.values())
     assert run.returncode == 1
     assert "requires the '%s' arg to be set" % missing in run.stderr, run.stderr
     assert 'Traceback' not in run.stderr + run.stdout
     assert 'auto-starting new master' not in run.stdout
 
 
-def without_ur_robot_driver():
-    """The environment with every ROS_PACKAGE_PATH entry that holds ur_robot_driver removed."""
-    def holds_driver(entry):
-        return (os.path.isfile(os.path.join(entry, 'ur_robot_driver', 'package.xml'))
-                or (os.path.basename(entry.rstrip('/')) == 'ur_robot_driver'
-                    and os.path.isfile(os.path.join(entry, 'package.xml'))))
-    path = [p for p in os.environ['ROS_PACKAGE_PATH'].split(os.pathsep) if p and not holds_driver(p)]
-    env = dict(os.environ, ROS_PACKAGE_PATH=os.pathsep.join(path))
+def without_ur_robot_driver(folder):
+    """The environment with every package found now, except ur_robot_driver, as links in `folder`.
+
+    (ur_robot_driver may share a ROS_PACKAGE_PATH entry with other packages,
+    e.g. /opt/ros/noetic/share, so entries cannot simply be dropped.)
+    """
+    rospack = rospkg.RosPack()
+    for name in rospack.list():
+        if name != 'ur_robot_driver':
+            os.symlink(rospack.get_path(name), os.path.join(str(folder), name))
+    env = dict(os.environ, ROS_PACKAGE_PATH=str(folder))
     check = subprocess.run(['rospack', 'find', 'ur_robot_driver'], env=env, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE)
     assert check.returncode != 0, 'could not take ur_robot_driver off ROS_PACKAGE_PATH'
     return env
 
 
-def test_sim_needs_no_ur_robot_driver_and_real_says_it_is_missing():
-    env = without_ur_robot_driver()
-    sim = subprocess.run(['roslaunch', '--nodes', PACKAGE, 'ur3_ft_gripper_bringup.launch', 'sim:=true'],
+def test_sim_needs_no_ur_robot_driver_and_real_says_it_is_missing(tmp_path):
+    env = without_ur_robot_driver(tmp_path)
+    # By path: the linked package and the workspace's source space would both match a package name.
+    launch_file = os.path.join(LAUNCH, 'ur3_ft_gripper_bringup.launch')
+    sim = subprocess.run(['roslaunch', '--nodes', launch_file, 'sim:=true'],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, env=env,
                          timeout=180)
     assert sim.returncode == 0, sim.stderr
     assert '/robotiq2FGripper' in sim.stdout.split()
-    real = roslaunch_run('ur3_ft_gripper_bringup.launch', 'gripper_device:=/dev/ttyUSB1', *REAL_ARGS, env=env)
+    real = roslaunch_run(launch_file, 'gripper_device:=/dev/ttyUSB1', *REAL_ARGS, env=env)
     assert real.returncode == 1
     assert 'ur_robot_driver' in real.stderr and 'not found' in real.stderr.lower(), real.stderr
     assert 'Traceback' not in real.stderr + real.stdout
