@@ -49,7 +49,7 @@ def test_a_model_that_the_installed_ur_description_adds_works(ur_description_wit
     ur5e = os.path.join(UR_CONFIG_ROOT, 'ur5e', 'default_kinematics.yaml')
     with open(ur5e) as f:
         shoulder_height = yaml.safe_load(f)['kinematics']['shoulder']['z']
-    assert model.joints['shoulder_pan_joint'].origin[2, 3] == pytest.approx(shoulder_height)
+    assert model.origin_xyz('shoulder_pan_joint')[2] == pytest.approx(shoulder_height)
     model.assert_joint_between('robotiq_ft_frame_id', 'robotiq_arg2f_base_link', 'fixed')
 
 
