@@ -13,8 +13,6 @@ import argparse
 import os
 import subprocess
 import sys
-import tempfile
-import textwrap
 import threading
 import time
 import xml.dom.minidom
@@ -26,46 +24,14 @@ PACKAGE = 'ur3_ft_gripper_description'
 GOALS = {'expansion': 1.25, 'bringup': 1.15}
 
 
-# -- xacro: the real ROS package, or a shim around the same patched PyPI xacro ------
+# -- xacro: the ROS package, as upstream's load_ur.launch runs it ----------------
 
-SHIM_MANIFEST = '''<?xml version="1.0"?>
-<package format="3">
-  <name>xacro</name><version>0.0.0</version>
-  <description>Benchmark shim: PyPI xacro with $(find) on ROS_PACKAGE_PATH</description>
-  <maintainer email="none@example.com">bench</maintainer><license>BSD</license>
-</package>
-'''
-SHIM_SCRIPT = '''#!%s
-"""xacro for the benchmark: the PyPI xacro that expand_description runs, same $(find) patch."""
-import sys
-from ur3_ft_gripper_description import description
-sys.exit(description.load_xacro().main())
-'''
-
-
-def xacro_setup(tmp):
+def xacro_setup():
     """(xacro executable, environment for roslaunch, description) for both models."""
     import rospkg
-    env = dict(os.environ)
-    try:
-        path = os.path.join(rospkg.RosPack().get_path('xacro'), 'xacro')
-        if os.path.exists(path):
-            return path, env, 'xacro ROS package (%s)' % path
-    except rospkg.ResourceNotFound:
-        pass
-    # No xacro ROS package (Debian: xacro from PyPI): `$(find xacro)/xacro` in
-    # upstream's load_ur.launch needs one, so a shim goes on ROS_PACKAGE_PATH, for the benchmark only.
-    folder = os.path.join(tmp, 'xacro')
-    os.makedirs(folder)
-    with open(os.path.join(folder, 'package.xml'), 'w') as f:
-        f.write(SHIM_MANIFEST)
-    script = os.path.join(folder, 'xacro')
-    with open(script, 'w') as f:
-        f.write(SHIM_SCRIPT % sys.executable)
-    os.chmod(script, 0o755)
-    env['ROS_PACKAGE_PATH'] = tmp + os.pathsep + env.get('ROS_PACKAGE_PATH', '')
-    from importlib import metadata
-    return script, env, 'PyPI xacro %s through a `xacro` package shim' % metadata.version('xacro')
+    from roslaunch.substitution_args import resolve_args
+    path = resolve_args('$(find xacro)/xacro')  # what upstream's load_ur.launch runs
+    return path, dict(os.environ), 'xacro %s (%s)' % (rospkg.RosPack().get_manifest('xacro').version, path)
 
 
 def upstream_xacro_file():
@@ -362,54 +328,53 @@ def main(argv=None):
     runs = 2 if args.short else 10
     results = dict(short=args.short, date=benchlib.now_text(), machine=benchlib.machine(),
                    load_before=benchlib.load_average(), variant=os.environ.get('ROBOTIQ_VARIANT', '?'))
-    with tempfile.TemporaryDirectory() as tmp:
-        xacro, env, results['xacro'] = xacro_setup(tmp)
-        say('model expansion, %d runs each' % runs)
-        results['expansion'], outputs = bench_expansion(xacro, env, runs)
-        results['links_upstream'] = len(links_of(outputs['upstream']))
-        results['links_ours'] = len(links_of(outputs['ours_users']))
+    xacro, env, results['xacro'] = xacro_setup()
+    say('model expansion, %d runs each' % runs)
+    results['expansion'], outputs = bench_expansion(xacro, env, runs)
+    results['links_upstream'] = len(links_of(outputs['upstream']))
+    results['links_ours'] = len(links_of(outputs['ours_users']))
 
-        master = benchlib.use_new_master()
-        env['ROS_MASTER_URI'] = os.environ['ROS_MASTER_URI']
+    master = benchlib.use_new_master()
+    env['ROS_MASTER_URI'] = os.environ['ROS_MASTER_URI']
+    try:
+        import rospy
+        import tf2_ros
+        rospy.init_node('bench', disable_signals=True)
+        import rospkg
+        up_launch = os.path.join(rospkg.RosPack().get_path('ur_description'), 'launch', 'load_ur3.launch')
+        our_launch = os.path.join(benchlib.PACKAGE_DIR, 'launch', 'load_ur3_ft_gripper.launch')
+        plain_launch = os.path.join(benchlib.BENCH_DIR, 'load_plain_xacro.launch')
+        results['bringup_runs'] = 1 if args.short else 10
+        say('bring-up, %d runs each' % results['bringup_runs'])
+        up_links, our_links = links_of(outputs['upstream']), links_of(outputs['ours_users'])
+        results['bringup'] = {k: [] for k in ('upstream', 'ours', 'ours_plain')}
+        for _ in range(results['bringup_runs']):  # interleaved, like the expansion
+            for key, launch, links in (('upstream', up_launch, up_links), ('ours', our_launch, our_links),
+                                       ('ours_plain', plain_launch, our_links)):
+                if results['bringup'][key] is None:
+                    continue
+                got = bench_bringup(launch, links, env, 1, rospy, tf2_ros,
+                                    timeout=15.0 if key == 'ours_plain' else 60.0)
+                if got is None and key != 'ours_plain':
+                    raise RuntimeError('%s: the model never completed in TF' % launch)
+                results['bringup'][key] = None if got is None else results['bringup'][key] + got
+
+        # The simulated devices against our model in TF, as in the view launch.
+        launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
+                                    'load:=%s' % our_launch, env=env)
         try:
-            import rospy
-            import tf2_ros
-            rospy.init_node('bench', disable_signals=True)
-            import rospkg
-            up_launch = os.path.join(rospkg.RosPack().get_path('ur_description'), 'launch', 'load_ur3.launch')
-            our_launch = os.path.join(benchlib.PACKAGE_DIR, 'launch', 'load_ur3_ft_gripper.launch')
-            plain_launch = os.path.join(benchlib.BENCH_DIR, 'load_plain_xacro.launch')
-            results['bringup_runs'] = 1 if args.short else 10
-            say('bring-up, %d runs each' % results['bringup_runs'])
-            up_links, our_links = links_of(outputs['upstream']), links_of(outputs['ours_users'])
-            results['bringup'] = {k: [] for k in ('upstream', 'ours', 'ours_plain')}
-            for _ in range(results['bringup_runs']):  # interleaved, like the expansion
-                for key, launch, links in (('upstream', up_launch, up_links), ('ours', our_launch, our_links),
-                                           ('ours_plain', plain_launch, our_links)):
-                    if results['bringup'][key] is None:
-                        continue
-                    got = bench_bringup(launch, links, env, 1, rospy, tf2_ros,
-                                        timeout=15.0 if key == 'ours_plain' else 60.0)
-                    if got is None and key != 'ours_plain':
-                        raise RuntimeError('%s: the model never completed in TF' % launch)
-                    results['bringup'][key] = None if got is None else results['bringup'][key] + got
-
-            # The simulated devices against our model in TF, as in the view launch.
-            launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
-                                        'load:=%s' % our_launch, env=env)
-            try:
-                benchlib.wait_for(lambda: rospy.has_param('robot_description'), 60, 'robot_description')
-                results['ft_seconds'] = 2.0 if args.short else 10.0
-                results['ft300'] = []
-                for rate, both in FT300_RUNS:
-                    say('ft300_sim at %d Hz, %s' % (rate, 'both topics' if both else 'wrench only'))
-                    results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy, both))
-                say('gripper_sim latency')
-                results['gripper'] = bench_gripper(6 if args.short else 40, rospy)
-            finally:
-                benchlib.stop(launch)
+            benchlib.wait_for(lambda: rospy.has_param('robot_description'), 60, 'robot_description')
+            results['ft_seconds'] = 2.0 if args.short else 10.0
+            results['ft300'] = []
+            for rate, both in FT300_RUNS:
+                say('ft300_sim at %d Hz, %s' % (rate, 'both topics' if both else 'wrench only'))
+                results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy, both))
+            say('gripper_sim latency')
+            results['gripper'] = bench_gripper(6 if args.short else 40, rospy)
         finally:
-            benchlib.stop(master)
+            benchlib.stop(launch)
+    finally:
+        benchlib.stop(master)
     results['load_after'] = benchlib.load_average()
     text = report(results)
     print(text)

@@ -11,9 +11,8 @@ import numpy as np
 import yaml
 
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.description import FINGER_JOINT, PADS
 
-FINGER_JOINT = 'finger_joint'
-PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 
 
 def load_gripper_spec(path, keys=('stroke',)):
@@ -70,12 +69,12 @@ def step_toward(current, target, speed, dt):
     return current + np.copysign(reach, delta)
 
 
-def _pad_thickness(link_element):
-    """Box size of a pad link (collision first, else visual), or None if it is no box."""
-    for tag in ('collision', 'visual'):
-        for part in link_element.getElementsByTagName(tag):
-            for box in part.getElementsByTagName('box'):
-                return [float(v) for v in box.getAttribute('size').split()]
+def _pad_box(link):
+    """Box size of a pad link (urdf_parser_py; collision first, else visual), or None if it is no box."""
+    for part in list(link.collisions) + list(link.visuals):
+        size = getattr(part.geometry, 'size', None)
+        if size is not None:
+            return [float(v) for v in size]
     return None
 
 
@@ -132,16 +131,17 @@ class GripperKinematics(object):
         if self.joint_name not in self.model.joints:
             raise ValueError("the model has no joint '%s'" % self.joint_name)
         joint = self.model.joints[self.joint_name]
-        if joint.lower is None or joint.upper is None or not joint.upper > joint.lower:
+        limit = joint.limit
+        if limit is None or limit.lower is None or limit.upper is None or not limit.upper > limit.lower:
             raise ValueError("joint '%s' has no usable <limit>" % self.joint_name)
-        self.lower, self.upper = joint.lower, joint.upper
+        self.lower, self.upper = limit.lower, limit.upper
         base = joint.parent
         self._chains = []
         for pad in PADS:
-            if prefix + pad not in self.model.link_elements:
+            if prefix + pad not in self.model.robot.link_map:
                 raise ValueError("the model has no link '%s'" % (prefix + pad))
             self._chains.append(self.model.chain(base, prefix + pad))
-        box = _pad_thickness(self.model.link_elements[prefix + PADS[0]])
+        box = _pad_box(self.model.robot.link_map[prefix + PADS[0]])
         self.pad_thickness = tuple(box) if box else (0.0, 0.0, 0.0)
         self.angles = np.linspace(self.lower, self.upper, int(samples))
         self.openings = np.array([self.opening_exact(a) for a in self.angles])

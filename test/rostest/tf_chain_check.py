@@ -1,9 +1,15 @@
 #!/usr/bin/env python3
-"""rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads."""
+"""rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads.
+
+robot_description comes from the load launch as users run it, which expands
+the model with the ROS 1 xacro that Noetic has (ros/xacro noetic-devel).
+"""
+import importlib.util
 import os
 import unittest
 
 import numpy as np
+import rospkg
 import rospy
 import rostest
 import tf2_ros
@@ -30,6 +36,15 @@ class TfChainTest(unittest.TestCase):
         """Pose of `source` in `target` as a 4x4 matrix, from TF."""
         msg = self.buffer.lookup_transform(target, source, rospy.Time(0), TIMEOUT)
         return kinematics.transform_msg_matrix(msg.transform)
+
+    def test_the_model_was_expanded_by_ros1_xacro(self):
+        # The launch's expand_description imports the xacro that this node sees.
+        version = rospkg.RosPack().get_manifest('xacro').version
+        self.assertEqual(version.split('.')[:2], ['1', '14'], 'xacro %s is not ROS 1 xacro' % version)
+        self.assertGreaterEqual(int(version.split('.')[2]), 10)
+        self.assertIsNotNone(importlib.util.find_spec('xacro'))
+        self.assertIsNone(importlib.util.find_spec('xacro.substitution_args'), "ROS 2's xacro is on the path")
+        self.assertIn('<robot name="ur3_ft_gripper"', rospy.get_param('robot_description'))
 
     def test_chain_from_base_link_through_sensor_to_gripper(self):
         for parent, child in zip(CHAIN, CHAIN[1:]):

@@ -5,18 +5,7 @@ import subprocess
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, UR_CONFIG, run_expand
-
-
-def assert_one_line_error(run, *words):
-    assert run.returncode == 1, run.stderr
-    assert run.stdout == '', 'a URDF was printed despite the error'
-    lines = run.stderr.strip().splitlines()
-    assert len(lines) == 1, run.stderr
-    assert lines[0].startswith('expand_description: error: ')
-    assert 'Traceback' not in run.stderr
-    for word in words:
-        assert word in lines[0], (word, lines[0])
+from conftest import PACKAGE_DIR, UR_CONFIG, assert_one_line_error, run_expand
 
 
 def kinematics_without(tmp_path, segment):

@@ -1,25 +1,70 @@
 """ur_type, the part toggles and world: what they accept, what they refuse, what they add."""
 import os
+import shutil
 import subprocess
 import textwrap
 
 import numpy as np
 import pytest
+import rospkg
+import yaml
+from roslaunch.substitution_args import resolve_args
 
-from conftest import UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, run_expand
-from test_bad_input import assert_one_line_error
-from ur3_ft_gripper_description import description
+from conftest import UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, assert_one_line_error, run_expand
+from ur3_ft_gripper_description import description, kinematics
 
-PARAMETER_FILES = ('joint_limits.yaml', 'default_kinematics.yaml', 'physical_parameters.yaml',
-                   'visual_parameters.yaml')
+PARAMETER_FILES = tuple(description.UR_DEFAULT_FILES.values())
 VALID_LIST = ', '.join(UR_TYPES)
+PINNED_UR_TYPES = ['ur3', 'ur3e', 'ur5', 'ur5e', 'ur10', 'ur10e', 'ur16e', 'ur20', 'ur30']  # 1.3.2
 
 
-def test_ur_types_are_exactly_the_models_ur_description_ships():
-    shipped = sorted(d for d in os.listdir(UR_CONFIG_ROOT)
-                     if all(os.path.isfile(os.path.join(UR_CONFIG_ROOT, d, f)) for f in PARAMETER_FILES))
-    assert sorted(UR_TYPES) == shipped
-    assert set(UR_TYPES) == {'ur3', 'ur3e', 'ur5', 'ur5e', 'ur10', 'ur10e', 'ur16e', 'ur20', 'ur30'}
+def test_ur_types_are_the_models_the_pinned_ur_description_ships():
+    assert UR_TYPES == PINNED_UR_TYPES
+
+
+@pytest.fixture
+def ur_description_with_ur7e(tmp_path):
+    """ROS_PACKAGE_PATH with a ur_description whose config/ also has a 'ur7e' (ur5e's files).
+
+    The copy holds links to the installed package's files and a config folder
+    of its own, in the test's temporary folder, ahead of the installed one.
+    """
+    installed = rospkg.RosPack().get_path('ur_description')
+    copy = tmp_path / 'ur_description'
+    copy.mkdir()
+    for name in os.listdir(installed):
+        if name != 'config':
+            os.symlink(os.path.join(installed, name), str(copy / name))
+    shutil.copytree(os.path.join(installed, 'config'), str(copy / 'config'))
+    shutil.copytree(str(copy / 'config' / 'ur5e'), str(copy / 'config' / 'ur7e'))
+    env = dict(os.environ, ROS_PACKAGE_PATH=os.pathsep.join([str(tmp_path), os.environ['ROS_PACKAGE_PATH']]))
+    assert rospkg.RosPack(rospkg.get_ros_paths(env)).get_path('ur_description') == str(copy)
+    return env
+
+
+def test_a_model_that_the_installed_ur_description_adds_works(ur_description_with_ur7e, tmp_path):
+    run = run_expand('ur_type:=ur7e', '-o', str(tmp_path / 'ur7e.urdf'), env=ur_description_with_ur7e)
+    assert run.returncode == 0, run.stderr
+    model = ExpandedModel((tmp_path / 'ur7e.urdf').read_text())
+    ur5e = os.path.join(UR_CONFIG_ROOT, 'ur5e', 'default_kinematics.yaml')
+    with open(ur5e) as f:
+        shoulder_height = yaml.safe_load(f)['kinematics']['shoulder']['z']
+    assert model.origin_xyz('shoulder_pan_joint')[2] == pytest.approx(shoulder_height)
+    model.assert_joint_between('robotiq_ft_frame_id', 'robotiq_arg2f_base_link', 'fixed')
+
+
+def test_the_load_launch_takes_a_model_that_the_installed_ur_description_adds(ur_description_with_ur7e):
+    run = subprocess.run(['roslaunch', '--dump-params', 'ur3_ft_gripper_description',
+                          'load_ur_ft_gripper.launch', 'ur_type:=ur7e'],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                         env=ur_description_with_ur7e, timeout=120)
+    assert run.returncode == 0 and 'expand_description: error' not in run.stderr, run.stderr
+    assert '/robot_description' in run.stdout and 'robotiq_arg2f_base_link' in run.stdout
+
+
+def test_unknown_ur_type_lists_what_the_installed_ur_description_ships(ur_description_with_ur7e):
+    run = run_expand('ur_type:=ur4', env=ur_description_with_ur7e)
+    assert_one_line_error(run, "ur_type 'ur4'", 'installed ur_description', 'ur5e, ur7e, ur10')
 
 
 @pytest.mark.parametrize('ur_type', ['ur4', 'UR3', 'ur3 ', ''])
@@ -27,17 +72,27 @@ def test_unknown_ur_type_is_one_line_listing_the_valid_ones(ur_type):
     assert_one_line_error(run_expand('ur_type:=%s' % ur_type), 'ur_type', VALID_LIST)
 
 
-def test_plain_xacro_on_the_macro_also_names_the_valid_ur_types(tmp_path):
+def _cell_with_ur_type(tmp_path, ur_type):
     cell = tmp_path / 'cell.xacro'
     cell.write_text(textwrap.dedent('''\
         <robot name="cell" xmlns:xacro="http://wiki.ros.org/xacro">
           <xacro:include filename="$(find ur3_ft_gripper_description)/urdf/inc/ur3_ft_gripper_macro.xacro"/>
-          <xacro:ur3_ft_gripper prefix="" ur_type="ur6"/>
-        </robot>'''))
-    with pytest.raises(description.DescriptionError) as error:
-        description.run_xacro(str(cell))
-    assert "ur_type 'ur6'" in str(error.value) and VALID_LIST in str(error.value)
-    assert '\n' not in str(error.value)
+          <xacro:ur3_ft_gripper prefix="" ur_type="%s"/>
+        </robot>''' % ur_type))
+    return str(cell)
+
+
+def test_expand_description_on_a_cell_names_the_valid_ur_types(tmp_path):
+    assert_one_line_error(run_expand(_cell_with_ur_type(tmp_path, 'ur6')), "ur_type 'ur6'", VALID_LIST)
+
+
+def test_plain_xacro_on_a_cell_names_the_missing_model_folder(tmp_path):
+    # xacro cannot list ur_description's models; its own error names the folder it lacks.
+    run = subprocess.run([resolve_args('$(find xacro)/xacro'), _cell_with_ur_type(tmp_path, 'ur6')],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=120)
+    assert run.returncode != 0
+    assert 'No such file or directory' in run.stderr
+    assert os.path.join('ur_description', 'config', 'ur6', 'joint_limits.yaml') in run.stderr
 
 
 @pytest.mark.parametrize('arg', ['ft_sensor', 'gripper', 'world'])
@@ -48,8 +103,8 @@ def test_toggle_that_is_not_a_boolean(arg):
 def test_explicit_parameter_file_wins_over_the_ur_type_default(expand_model):
     ur3_kinematics = os.path.join(UR_CONFIG, 'default_kinematics.yaml')
     model = expand_model(ur_type='ur5e', kinematics_params=ur3_kinematics)
-    assert model.joints['shoulder_pan_joint'].origin[2, 3] == pytest.approx(0.1519)  # UR3's
-    assert expand_model(ur_type='ur5e').joints['shoulder_pan_joint'].origin[2, 3] == pytest.approx(0.1625)
+    assert model.origin_xyz('shoulder_pan_joint')[2] == pytest.approx(0.1519)  # UR3's
+    assert expand_model(ur_type='ur5e').origin_xyz('shoulder_pan_joint')[2] == pytest.approx(0.1625)
 
 
 @pytest.mark.parametrize('prefix', ['', 'r1_'])
@@ -58,7 +113,7 @@ def test_world_roots_the_model_at_world(expand_model, prefix, tmp_path):
     assert model.root() == 'world'
     joint = model.assert_joint_between('world', prefix + 'base_link', 'fixed')
     assert joint.name == prefix + 'world_joint'
-    np.testing.assert_allclose(joint.origin, np.eye(4))
+    np.testing.assert_allclose(kinematics.pose_matrix(joint.origin), np.eye(4))
     urdf = tmp_path / 'world.urdf'
     urdf.write_text(model.text)
     run = subprocess.run(['check_urdf', str(urdf)], stdout=subprocess.PIPE, universal_newlines=True)
@@ -81,10 +136,11 @@ def test_coupling_is_13_9_mm_and_keeps_the_gripper_turned_as_on_the_sensor(confi
     sensor = on_sensor.transform('tool0', 'robotiq_arg2f_base_link')
     np.testing.assert_allclose(coupling[:3, 3], [0, 0, 0.0139], atol=1e-9)
     np.testing.assert_allclose(coupling[:3, :3], sensor[:3, :3], atol=1e-9)
-    mesh = bare.link_elements['robotiq_arg2f_coupling'].getElementsByTagName('mesh')[0]
-    assert mesh.getAttribute('filename') == \
+    mesh = bare.meshes('robotiq_arg2f_coupling')[0]
+    assert mesh.filename == \
         'package://robotiq_2f_140_gripper_visualization/meshes/visual/robotiq_arg2f_coupling.stl'
-    assert mesh.getAttribute('scale') == '0.001 0.001 0.001'  # the STL is in mm
+    assert mesh.scale == [0.001, 0.001, 0.001]  # the STL is in mm
+    bare.assert_mesh_resolves(mesh)
 
 
 def test_both_parts_off_is_the_bare_ur_arm(configured_model):

@@ -111,8 +111,7 @@ def gripper(default_model):
 
 
 def test_gripper_joint_range_comes_from_the_model(gripper, default_model):
-    joint = default_model.joints['finger_joint']
-    assert (gripper.lower, gripper.upper) == (joint.lower, joint.upper)
+    assert (gripper.lower, gripper.upper) == default_model.limits('finger_joint')
     assert gripper.lower == pytest.approx(0.0) and gripper.upper == pytest.approx(0.7)
 
 
