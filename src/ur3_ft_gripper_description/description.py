@@ -13,7 +13,6 @@ files and then:
 import os
 import re
 import subprocess
-import xml.dom.minidom
 
 import yaml
 

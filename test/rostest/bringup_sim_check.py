@@ -12,9 +12,9 @@ from geometry_msgs.msg import WrenchStamped
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 from sensor_msgs.msg import JointState
 
+import rostest_helpers
+from rostest_helpers import TIMEOUT
 from ur3_ft_gripper_description import gripper_joint_states, gripper_model, kinematics
-
-TIMEOUT = 30.0
 ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
               'wrist_3_joint')
 # TF against the model: the finger angle table is exact to 1e-6 rad, which
@@ -62,13 +62,7 @@ class BringupSimTest(unittest.TestCase):
         self.command.publish(Robotiq2FGripper_robot_output(**registers))
 
     def pad_gap(self):
-        """Gap between the pads' inner faces, from TF."""
-        poses = []
-        for pad in gripper_model.PADS:
-            msg = self.buffer.lookup_transform(self.prefix + 'robotiq_arg2f_base_link', self.prefix + pad,
-                                               rospy.Time(0), rospy.Duration(TIMEOUT))
-            poses.append(kinematics.transform_msg_matrix(msg.transform))
-        return gripper_model.pad_gap(poses[0], poses[1], self.fingers.pad_thickness)
+        return rostest_helpers.pad_gap(self.buffer, self.fingers, prefix=self.prefix)
 
     def expected_gap(self, gpo):
         """The model's pad gap for a status gPO: the register's opening, within what the model can show."""
@@ -122,7 +116,7 @@ class BringupSimTest(unittest.TestCase):
         msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'tool0', rospy.Time(0),
                                            rospy.Duration(TIMEOUT))
         expected = self.model.transform(self.prefix + 'base_link', self.prefix + 'tool0')
-        np.testing.assert_allclose(kinematics.transform_msg_matrix(msg.transform), expected, atol=1e-6)
+        np.testing.assert_allclose(rostest_helpers.transform_matrix(msg.transform), expected, atol=1e-6)
 
     def test_simulated_sensor_under_the_real_name(self):
         msg = rospy.wait_for_message('robotiq_ft_wrench', WrenchStamped, TIMEOUT)

@@ -18,6 +18,7 @@ import tf2_ros
 import yourdfpy
 from sensor_msgs.msg import JointState
 
+import rostest_helpers
 from ur3_ft_gripper_description import export, kinematics
 
 TIMEOUT = rospy.Duration(20)
@@ -107,7 +108,7 @@ class ExportFkTest(unittest.TestCase):
                     continue
                 tf = self.buffer.lookup_transform(root, link, stamp, TIMEOUT)
                 np.testing.assert_allclose(
-                    kinematics.transform_msg_matrix(tf.transform),
+                    rostest_helpers.transform_matrix(tf.transform),
                     self.urdf.get_transform(link, root), atol=TOLERANCE,
                     err_msg='%s, trial %d, joints %s' % (link, trial, cfg))
 

@@ -14,12 +14,12 @@ import rospy
 import rostest
 import tf2_ros
 
+import rostest_helpers
 from ur3_ft_gripper_description import description, kinematics
 
 CHAIN = ['base_link', 'tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_ft_frame_id',
          'robotiq_arg2f_base_link']
 PADS = ['left_inner_finger_pad', 'right_inner_finger_pad']
-TIMEOUT = rospy.Duration(30)
 
 FT300_ALONE = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'data', 'ft300_alone.xacro')
 
@@ -34,8 +34,7 @@ class TfChainTest(unittest.TestCase):
 
     def lookup(self, target, source):
         """Pose of `source` in `target` as a 4x4 matrix, from TF."""
-        msg = self.buffer.lookup_transform(target, source, rospy.Time(0), TIMEOUT)
-        return kinematics.transform_msg_matrix(msg.transform)
+        return rostest_helpers.lookup(self.buffer, target, source)
 
     def test_the_model_was_expanded_by_ros1_xacro(self):
         # The launch's expand_description imports the xacro that this node sees.

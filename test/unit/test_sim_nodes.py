@@ -1,5 +1,4 @@
 """The simulated-device nodes' logic without a ROS master: parameters, warnings, motion."""
-import math
 
 import numpy as np
 import pytest
