@@ -14,7 +14,8 @@ from sensor_msgs.msg import JointState
 
 import rostest_helpers
 from rostest_helpers import TIMEOUT
-from ur3_ft_gripper_description import gripper_joint_states, gripper_model, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import gripper_joint_states, gripper_model
 ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
               'wrist_3_joint')
 # TF against the model: the finger angle table is exact to 1e-6 rad, which

@@ -19,7 +19,8 @@ import yourdfpy
 from sensor_msgs.msg import JointState
 
 import rostest_helpers
-from ur3_ft_gripper_description import export, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import export
 
 TIMEOUT = rospy.Duration(20)
 TRIALS = 3

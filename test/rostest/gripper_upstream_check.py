@@ -19,7 +19,7 @@ from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq
 
 import rostest_helpers
 from rostest_helpers import TIMEOUT
-from ur3_ft_gripper_description import gripper_model
+from ur3_ft_gripper_description.devices import gripper_model
 # A goal of P m ends within one count of the position register (0.140 m / 227
 # counts = 0.62 mm; the action server truncates to a whole count) plus the
 # finger angle table's error (< 1e-6 rad): 0.7 mm.

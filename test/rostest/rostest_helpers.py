@@ -6,7 +6,8 @@ import numpy as np
 import rospy
 from transforms3d.quaternions import quat2mat
 
-from ur3_ft_gripper_description import description, gripper_model
+from ur3_ft_gripper_description.devices import gripper_model
+from ur3_ft_gripper_description.model import description
 
 TIMEOUT = 30.0
 

@@ -19,7 +19,8 @@ from robotiq_ft_sensor.srv import sensor_accessor
 
 import rostest_helpers
 from rostest_helpers import TIMEOUT, Recorder
-from ur3_ft_gripper_description import gripper_model, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import gripper_model
 
 G = 9.80665
 GRIPPER_MASS, GRIPPER_COM = 0.975, np.array([0.0, 0.0, 0.062])  # config/sim_devices.yaml

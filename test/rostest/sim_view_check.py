@@ -13,7 +13,8 @@ from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq
 
 import rostest_helpers
 from rostest_helpers import TIMEOUT
-from ur3_ft_gripper_description import gripper_model, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import gripper_model
 
 
 class SimViewTest(unittest.TestCase):

@@ -15,7 +15,8 @@ import rostest
 import tf2_ros
 
 import rostest_helpers
-from ur3_ft_gripper_description import description, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import description
 
 CHAIN = ['base_link', 'tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_ft_frame_id',
          'robotiq_arg2f_base_link']

@@ -6,7 +6,7 @@ import pytest
 import yourdfpy
 
 from conftest import ExpandedModel, run_export
-from ur3_ft_gripper_description import export
+from ur3_ft_gripper_description.model import export
 
 CASES = {  # name -> export_urdf options
     'ur3-default': [],

@@ -43,7 +43,7 @@ def vermin(*args):
 def test_the_files_include_the_scripts_without_py():
     names = {os.path.relpath(p, PACKAGE_DIR) for p in python_files(PACKAGE_DIR)}
     assert {'scripts/expand_description', 'scripts/export_urdf'} <= names
-    assert 'src/ur3_ft_gripper_description/description.py' in names
+    assert 'src/ur3_ft_gripper_description/model/description.py' in names
     assert 'tools/quickstart' not in names  # bash
 
 
