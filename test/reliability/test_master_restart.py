@@ -99,3 +99,30 @@ def test_nodes_exit_once_and_respawn_on_a_restarted_master(master):
         lines = [line for line in output.splitlines() if node + ': the ROS master' in line]
         assert len(lines) == 1 and 'was restarted' in lines[0] and 'exiting' in lines[0], output[-3000:]
     assert 'Traceback' not in output, output[-3000:]
+
+
+def test_a_node_started_before_the_master_waits_for_it(master):
+    """As roscpp nodes do: one line saying so, then the node runs on the master that comes up."""
+    master.kill()
+    log = tempfile.NamedTemporaryFile('w+', suffix='.log')
+    node = subprocess.Popen(['rosrun', 'ur3_ft_gripper_description', 'gripper_sim'],
+                            stdout=log, stderr=subprocess.STDOUT, env=master.env)
+    try:
+        assert wait_until(lambda: 'waiting for the ROS master' in tail(log), 60), tail(log)
+        assert node.poll() is None, tail(log)
+        master.start()
+        assert wait_until(lambda: '/robotiq2FGripper' in system_state_or_empty(master.uri)[1].get(
+            '/Robotiq2FGripperRobotOutput', []), 60), tail(log)
+        assert 'gSTA' in (topic_message('/Robotiq2FGripperRobotInput', master.env, timeout=60) or '')
+    finally:
+        benchlib.stop(node)
+    output = tail(log, chars=10 ** 7)
+    assert output.count('waiting for the ROS master') == 1, output
+    assert 'Traceback' not in output, output
+
+
+def system_state_or_empty(master_uri):
+    try:
+        return system_state(master_uri)
+    except Exception:  # the master is still coming up
+        return {}, {}, {}

@@ -292,6 +292,4 @@ def run(rospy):
 
 
 def main():
-    import rospy
-    rospy.init_node('robotiq_ft_sensor')
-    return run(rospy)
+    return node_loop.main('robotiq_ft_sensor', run)

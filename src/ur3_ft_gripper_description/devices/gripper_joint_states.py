@@ -22,7 +22,7 @@ Private parameters:
   ~devices_file  config/sim_devices.yaml
 """
 
-from ur3_ft_gripper_description.devices import gripper_model, sim_params
+from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 
 # Samples of the finger angle table: interpolation in it is within 1e-6 rad of
 # the exact inverse (test_sim_models checks it).
@@ -57,8 +57,6 @@ def run(rospy):
     """The node. Returns the exit status."""
     from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input
     from sensor_msgs.msg import JointState
-
-    from ur3_ft_gripper_description.devices import node_loop
 
     name = rospy.get_name()
     try:
@@ -96,6 +94,4 @@ def run(rospy):
 
 
 def main():
-    import rospy
-    rospy.init_node('gripper_joint_states')
-    return run(rospy)
+    return node_loop.main('gripper_joint_states', run)

@@ -284,6 +284,4 @@ def run(rospy):
 
 
 def main():
-    import rospy
-    rospy.init_node('robotiq2FGripper')
-    return run(rospy)
+    return node_loop.main('robotiq2FGripper', run)

@@ -11,11 +11,42 @@ starts them again on the new master.
 
 import gc
 import socket
+import sys
 import threading
 import xmlrpc.client
 
 # Seconds between two looks at the master.
 MASTER_CHECK_PERIOD = 1.0
+
+# What a call to a master that is not (yet, or no longer) there raises.
+MASTER_UNREACHABLE = (OSError, socket.error, xmlrpc.client.Error)
+
+
+def main(name, run):
+    """A device node's main(): init `name` once the master answers, `run(rospy)`; the exit status.
+
+    rospy, unlike roscpp, does not wait for the master: a node that roslaunch
+    respawns while a restarted master is still coming up would die in its
+    first parameter read. It waits, saying so once; a master lost during
+    start-up ends it with one line (and roslaunch's respawn tries again).
+    """
+    import rosgraph
+    import rospy
+    said = False
+    pause = threading.Event()
+    while not rosgraph.is_master_online():
+        if not said:
+            print('%s: waiting for the ROS master at %s' % (name, rosgraph.get_master_uri()),
+                  file=sys.stderr)
+            said = True
+        pause.wait(0.5)
+    rospy.init_node(name)
+    try:
+        return run(rospy)
+    except MASTER_UNREACHABLE as exc:
+        print('%s: lost the ROS master at %s (%s): exiting' % (name, rosgraph.get_master_uri(), exc),
+              file=sys.stderr)
+        return 1
 
 
 def watch_master(rospy, period=MASTER_CHECK_PERIOD):
@@ -28,7 +59,7 @@ def watch_master(rospy, period=MASTER_CHECK_PERIOD):
     master = rosgraph.Master(name)
     first = master.getPid()
     state = {'restarted': False}
-    unreachable = (OSError, socket.error, xmlrpc.client.Error, rosgraph.MasterException)
+    unreachable = MASTER_UNREACHABLE + (rosgraph.MasterException,)
 
     def loop():
         # Wall-clock waits: with use_sim_time and no clock, rospy.sleep would block forever.
