@@ -5,7 +5,6 @@ no display, and test/view uses the same HeadlessView, so CI exercises the code
 path of the README's view command. `check_screenshot` says whether a
 screenshot's 3D view holds the robot.
 """
-import argparse
 import collections
 import os
 import select
@@ -256,7 +255,8 @@ class HeadlessView(object):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(
+    from .cli import _OneLineParser
+    parser = _OneLineParser(
         prog='view_screenshot',
         description='Run the view launch under Xvfb (no display needed), move the joint sliders '
                     'beside RViz, and save a screenshot once the robot shows. Prints '
