@@ -274,10 +274,13 @@ def main(argv=None):
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     try:
         with HeadlessView(args.launch_args, args.log) as view:
+            start = time.monotonic()
             view.open()
-            print('[view_screenshot] RViz under Xvfb (%s); waiting for the robot to show' % view.display,
-                  file=sys.stderr)
+            print('[view_screenshot] RViz up under Xvfb (%s) after %.0f s; waiting for the robot to show'
+                  % (view.display, time.monotonic() - start), file=sys.stderr)
+            start = time.monotonic()
             view.screenshot(output, args.robot_timeout)
+            print('[view_screenshot] the robot showed after %.0f s' % (time.monotonic() - start), file=sys.stderr)
     except ViewError as e:
         print('view_screenshot: error: %s' % e, file=sys.stderr)
         return 1
