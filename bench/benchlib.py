@@ -8,6 +8,7 @@ import os
 import platform
 import signal
 import socket
+import statistics
 import subprocess
 import sys
 import time
@@ -102,15 +103,14 @@ def rss_mb(pid):
 
 
 def percentile(values, q):
-    ordered = sorted(values)
-    if not ordered:
-        return float('nan')
-    k = min(len(ordered) - 1, max(0, int(round(q / 100.0 * (len(ordered) - 1)))))
-    return ordered[k]
+    """The q-th percentile (q in 1..99), nan for no values."""
+    if len(values) < 2:
+        return float(values[0]) if values else float('nan')
+    return statistics.quantiles(values, n=100, method='inclusive')[q - 1]
 
 
 def median(values):
-    return percentile(values, 50)
+    return statistics.median(values) if values else float('nan')
 
 
 def load_average():

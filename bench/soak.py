@@ -5,7 +5,7 @@ the wrench stream has no gap.
 
     python3 bench/soak.py [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
 
-Limits (issue 5): resident memory of ft300_sim and gripper_sim grows by at most
+Limits: resident memory of ft300_sim and gripper_sim grows by at most
 5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
 (header stamps, i.e. as the node published them; the gaps as received here are
 reported too). Exit status 0 when both hold, 1 otherwise. Started on its own

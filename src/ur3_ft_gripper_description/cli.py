@@ -53,7 +53,7 @@ def expand_description_main(argv=None):
         return 1
     except ImportError as e:
         print('expand_description: error: %s is missing for %s: use the python3 that has the ROS '
-              'modules (source your catkin workspace, or see README "Set-up")' % (
+              'modules (source your catkin workspace, or run bash tools/quickstart shell)' % (
                   e.name, sys.executable), file=sys.stderr)
         return 1
     except OSError as e:

@@ -1,10 +1,18 @@
-"""Simulated Robotiq FT 300: what the real sensor reads when nothing touches the tool.
+"""Simulated Robotiq FT 300 behind the interface of Robotiq's own driver (rq_sensor).
 
-Publishes ``robotiq_ft_wrench`` (geometry_msgs/WrenchStamped), the topic of
-the real driver (robotiq_ft_sensor's ``rq_sensor``), in ``~frame_id``: the
-weight of the gripper (and of a held object) as it acts on the sensor for the
-current pose, taken from TF, plus white noise, minus the zero offset that the
-``robotiq_ft_zero`` service (std_srvs/Trigger) sets.
+Like robotiq_ft_sensor's ``rq_sensor`` (node name ``robotiq_ft_sensor``) it
+publishes, at the sensor's 100 Hz, ``robotiq_ft_sensor``
+(robotiq_ft_sensor/ft_sensor) and ``robotiq_ft_wrench``
+(geometry_msgs/WrenchStamped in ``~frame_id``) with the same values, in the
+device's resolution (its stream carries 16-bit counts of 0.01 N and
+0.001 Nm, which rq_sensor turns into float32), and serves
+``robotiq_ft_sensor_acc`` (robotiq_ft_sensor/sensor_accessor) with
+rq_sensor's answers (``accessor_reply``). ``~serial_id`` and
+``~max_retries`` are accepted, as a launch file for the real sensor sets them.
+
+The reading is what the real sensor shows when nothing touches the tool:
+the weight of the gripper (and of a held object) for the current pose,
+taken from TF, plus white noise, minus the zero that SET_ZERO takes.
 
 Private parameters (defaults from config/sim_devices.yaml):
   ~prefix          '' ; prefix of the model's frames (default frames follow it)
@@ -14,18 +22,16 @@ Private parameters (defaults from config/sim_devices.yaml):
   ~noise_force     0.1 N, ~noise_torque 0.005 Nm (standard deviations; 0 = none)
   ~payload_mass    0 kg ; ~payload_com [0, 0, 0] m in the sensor frame: a held object
   ~gripper_mounted true ; false: the model has no 2F-140, only ~payload hangs on the sensor
-  ~devices_file    config/sim_devices.yaml (mass model of the gripper)
+  ~devices_file    config/sim_devices.yaml (mass model of the gripper, the sensor's identity)
   ~max_pose_age    0.5 s ; a pose older than this is stale (robot_state_publisher
-                   stopped?): no wrench is published until it is fresh again
+                   stopped?): nothing is published until it is fresh again
+  ~serial_id, ~max_retries  rq_sensor's (serial device, reconnection tries): accepted, unused
 
 Until the pose is known the node waits, warns once and publishes nothing; it
 never publishes a wrench for a pose it does not know.
 """
 
 import dataclasses
-import math
-import threading
-
 import numpy as np
 
 from ur3_ft_gripper_description import node_loop, sim_params, wrench_model
@@ -67,75 +73,96 @@ class FT300Settings(object):
 # cost more than the rest of the reading.
 NOISE_BLOCK = 256
 
+# The stream's resolution (rq_sensor_com.cpp divides its 16-bit counts by 100
+# for forces and by 1000 for torques).
+FORCE_RESOLUTION, TORQUE_RESOLUTION = 0.01, 0.001
+COUNT_MIN, COUNT_MAX = -32768, 32767
+
+
+def as_device_sends(values):
+    """(fx, fy, fz, tx, ty, tz) rounded to the stream's counts, as the float32 rq_sensor publishes."""
+    counts = [min(max(round(v / r), COUNT_MIN), COUNT_MAX) for v, r in
+              zip(values, (FORCE_RESOLUTION,) * 3 + (TORQUE_RESOLUTION,) * 3)]
+    scaled = [c / 100.0 for c in counts[:3]] + [c / 1000.0 for c in counts[3:]]
+    return tuple(np.array(scaled, dtype=np.float32).tolist())
+
 
 class SensorModel(object):
-    """Reading = gravity wrench of the payload + noise - zero offset (no ROS).
-
-    The node calls this 100 to 1000 times a second, so the arithmetic is done
-    on plain floats: numpy costs more in call overhead than it saves on
-    3-vectors (cProfile: half of the node's loop time went to np.cross,
-    np.linalg.norm and np.eye). wrench_model.gravity_wrench is the reference
-    it is tested against.
-    """
+    """Reading = gravity wrench of the payload + noise - zero offset (no ROS)."""
 
     def __init__(self, settings, rng=None):
         self.settings = settings
         self.rng = rng if rng is not None else np.random.default_rng()
-        self.zero = wrench_model.ZeroOffset()
         self.last_true = None  # noise-free wrench at the last known pose
-        self._lock = threading.Lock()
+        self._zero_requested = False
         payload = settings.payload
-        self._weight = float(payload.mass) * wrench_model.STANDARD_GRAVITY
+        self._mass = float(payload.mass)
         self._com = tuple(float(v) for v in payload.com)
         self._noisy = bool(settings.noise_force or settings.noise_torque)
         self._sigma = np.array([settings.noise_force] * 3 + [settings.noise_torque] * 3)
         self._noise = []  # pre-drawn noise rows: one numpy call per NOISE_BLOCK readings
         self._offset = (0.0,) * 6
 
-    def read(self, sensor_orientation):
-        """(force, torque) for the sensor's 3x3 orientation in the gravity frame."""
-        r = sensor_orientation
-        # Gravity (world -z) in the sensor frame is R.T @ (0, 0, -1): minus R's last row.
-        return self.read_gravity(-float(r[2][0]), -float(r[2][1]), -float(r[2][2]))
-
     def read_quaternion(self, x, y, z, w):
-        """Like read(), for the sensor's orientation as a unit quaternion (a tf2 lookup's)."""
-        # Last row of kinematics.quaternion_matrix(x, y, z, w), negated.
+        """The reading for the sensor's orientation as a unit quaternion (a tf2 lookup's)."""
+        # Gravity (world -z) in the sensor frame: minus the rotation matrix's last row.
         return self.read_gravity(2.0 * (y * w - x * z), -2.0 * (y * z + x * w),
                                  2.0 * (x * x + y * y) - 1.0)
 
     def read_gravity(self, gx, gy, gz):
-        """(force, torque) tuples for gravity along (gx, gy, gz) in the sensor frame (any length)."""
-        norm = math.sqrt(gx * gx + gy * gy + gz * gz)
-        if not math.isfinite(norm) or norm == 0.0:
-            raise ValueError('gravity direction is zero or not finite: %r' % ((gx, gy, gz),))
-        scale = self._weight / norm
-        fx, fy, fz = scale * gx, scale * gy, scale * gz
-        cx, cy, cz = self._com
-        true = (fx, fy, fz, cy * fz - cz * fy, cz * fx - cx * fz, cx * fy - cy * fx)
+        """(fx, fy, fz, tx, ty, tz), as the device sends it, for gravity along (gx, gy, gz)."""
+        true = wrench_model.gravity_wrench(gx, gy, gz, self._mass, self._com)
+        if self._zero_requested:
+            # As rq_sensor_com does: the reading before the request becomes the zero.
+            # Its noise-free value is taken, what the noise averages out to.
+            self._zero_requested = False
+            self._offset = self.last_true if self.last_true is not None else true
+        self.last_true = true
         values = true
         if self._noisy:
             if not self._noise:
                 self._noise = (self.rng.standard_normal((NOISE_BLOCK, 6)) * self._sigma).tolist()
             values = [v + n for v, n in zip(true, self._noise.pop())]
-        with self._lock:
-            self.last_true = true
-            offset = self._offset
-        reading = [v - o for v, o in zip(values, offset)]
-        return tuple(reading[:3]), tuple(reading[3:])
+        return as_device_sends([v - o for v, o in zip(values, self._offset)])
 
-    def set_zero(self):
-        """Take the current (noise-free) reading as the new zero; False if no pose is known yet.
+    def request_zero(self):
+        """SET_ZERO: the next reading and those after it are relative to the current one."""
+        self._zero_requested = True
 
-        The real sensor averages over its samples when zeroing; the noise-free
-        value is what that average converges to.
-        """
-        with self._lock:
-            if self.last_true is None:
-                return False
-            self.zero.set((self.last_true[:3], self.last_true[3:]))
-            self._offset = tuple(self.zero.force.tolist() + self.zero.torque.tolist())
-            return True
+
+def accessor_reply(command_id, command, sensor, identity, log):
+    """(success, res) of rq_sensor's robotiq_ft_sensor_acc for a request; `log` has info/warn/warn_once.
+
+    The deprecated 7-character string (``command``) wins over ``command_id``,
+    and never reports success, as in rq_sensor.cpp. Where rq_sensor answers
+    with a buffer it never wrote (a string that is not 7 characters, an
+    unknown name), this answers ''.
+    """
+    if command:
+        log.warn_once('Usage of command-string is deprecated, please use the numeric command_id')
+        log.info('I heard: [%s]' % command)
+        res = ''
+        if len(command) == 7:
+            action, name = command[:3], command[4:]
+            if action == 'GET':
+                res = {'SNU': identity['serial_number'], 'FWV': identity['firmware_version'],
+                       'PYE': identity['production_year']}.get(name, '')
+            elif action == 'SET' and 'ZRO' in name:
+                sensor.request_zero()
+                res = 'Done'
+        log.info('I send: [%s]' % res)
+        return False, res
+    if command_id == 1:
+        return True, identity['serial_number']
+    if command_id == 2:
+        return True, identity['firmware_version']
+    if command_id == 4:
+        return True, identity['production_year']
+    if command_id == 8:
+        sensor.request_zero()
+        return True, 'Done'
+    log.warn("Unsupported command_id '%i', should be in [1, 2, 4, 8]" % command_id)
+    return False, 'Unsupported command_id'
 
 
 class PoseWatch(object):
@@ -172,7 +199,7 @@ class PoseWatch(object):
             return False
         if self.state != 'ok':
             self._enter('ok', lambda: (
-                'ft300_sim: pose of %s in %s known; publishing robotiq_ft_wrench at %g Hz'
+                'ft300_sim: pose of %s in %s known; publishing robotiq_ft_sensor and robotiq_ft_wrench at %g Hz'
                 % (self.settings.frame_id, self.settings.gravity_frame, self.settings.rate)),
                 self._info)
         return True
@@ -191,33 +218,53 @@ class PoseWatch(object):
             % (self.settings.gravity_frame, self.settings.frame_id, reason)), self._warn)
 
 
+class _Log(object):
+    """rospy's loggers as accessor_reply takes them."""
+
+    def __init__(self, rospy):
+        self.info, self.warn = rospy.loginfo, rospy.logwarn
+        self._once = set()
+
+    def warn_once(self, text):
+        if text not in self._once:
+            self._once.add(text)
+            self.warn(text)
+
+
 def run(rospy):
-    """The node: parameters, publisher, service, loop. Returns the exit status."""
+    """The node: parameters, publishers, service, loop. Returns the exit status."""
     import tf2_ros
     from geometry_msgs.msg import WrenchStamped
-    from std_srvs.srv import Trigger, TriggerResponse
+    from robotiq_ft_sensor.msg import ft_sensor
+    from robotiq_ft_sensor.srv import sensor_accessor, sensor_accessorResponse
 
     try:
         settings = FT300Settings.from_params(rospy.get_param)
     except sim_params.ParamError as exc:
         rospy.logfatal('ft300_sim: bad parameter %s', exc)
         return 1
+    # Read as rq_sensor reads them; there is no serial device to open or retry.
+    serial_id = rospy.get_param('~serial_id', '')
+    rospy.get_param('~max_retries', 100)
+    if serial_id:
+        rospy.loginfo('ft300_sim: ~serial_id %s is not used: this sensor is simulated', serial_id)
     sensor = SensorModel(settings)
     watch = PoseWatch(settings, rospy.logwarn, rospy.loginfo, rospy.Time.now().to_sec())
     tf_buffer = tf2_ros.Buffer()
     tf2_ros.TransformListener(tf_buffer)
-    publisher = rospy.Publisher('robotiq_ft_wrench', WrenchStamped, queue_size=10)
+    sensor_publisher = rospy.Publisher('robotiq_ft_sensor', ft_sensor, queue_size=512)
+    wrench_publisher = rospy.Publisher('robotiq_ft_wrench', WrenchStamped, queue_size=512)
+    log = _Log(rospy)
 
-    def zero(_request):
-        if sensor.set_zero():
-            return TriggerResponse(success=True, message='zeroed: later readings are relative '
-                                   'to the current one')
-        return TriggerResponse(success=False, message='no pose known yet (TF %s -> %s): nothing '
-                               'to zero' % (settings.gravity_frame, settings.frame_id))
+    def accessor(request):
+        success, res = accessor_reply(request.command_id, request.command, sensor,
+                                      settings.payload.identity, log)
+        return sensor_accessorResponse(success=success, res=res)
 
-    rospy.Service('robotiq_ft_zero', Trigger, zero)
+    rospy.Service('robotiq_ft_sensor_acc', sensor_accessor, accessor)
     latest = rospy.Time(0)
-    # One message, refilled each cycle: publish() serializes it before returning.
+    # One message each, refilled each cycle: publish() serializes before returning.
+    stream = ft_sensor()
     message = WrenchStamped()
     message.header.frame_id = settings.frame_id
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
@@ -233,16 +280,18 @@ def run(rospy):
             return
         if watch.fresh(stamped.header.stamp.to_sec(), now.to_sec()):
             q = stamped.transform.rotation
-            force, torque = sensor.read_quaternion(q.x, q.y, q.z, q.w)
+            fx, fy, fz, tx, ty, tz = sensor.read_quaternion(q.x, q.y, q.z, q.w)
+            stream.Fx, stream.Fy, stream.Fz, stream.Mx, stream.My, stream.Mz = fx, fy, fz, tx, ty, tz
+            sensor_publisher.publish(stream)
             message.header.stamp = now
-            force_msg.x, force_msg.y, force_msg.z = force
-            torque_msg.x, torque_msg.y, torque_msg.z = torque
-            publisher.publish(message)
+            force_msg.x, force_msg.y, force_msg.z = fx, fy, fz
+            torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
+            wrench_publisher.publish(message)
 
     return node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=tf_buffer.clear)
 
 
 def main():
     import rospy
-    rospy.init_node('ft300_sim')
+    rospy.init_node('robotiq_ft_sensor')
     return run(rospy)

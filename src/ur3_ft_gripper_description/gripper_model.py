@@ -11,19 +11,51 @@ import numpy as np
 import yaml
 
 from ur3_ft_gripper_description import kinematics
-
-FINGER_JOINT = 'finger_joint'
-PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
+from ur3_ft_gripper_description.description import FINGER_JOINT, PADS
 
 
-def load_gripper_spec(path):
-    """The `gripper` section (stroke, min_speed, max_speed in m, m/s) of a YAML file."""
+
+def load_gripper_spec(path, keys=('stroke',)):
+    """The `gripper` section of a YAML file like config/sim_devices.yaml; ValueError if a key is missing."""
     with open(path) as f:
         data = yaml.safe_load(f) or {}
     spec = data.get('gripper') if isinstance(data, dict) else None
-    if not isinstance(spec, dict) or 'stroke' not in spec:
-        raise ValueError("%s: no 'gripper' section with a stroke" % path)
-    return {k: float(v) for k, v in spec.items()}
+    if not isinstance(spec, dict):
+        raise ValueError("%s: no 'gripper' section" % path)
+    missing = [k for k in keys if k not in spec]
+    if missing:
+        raise ValueError("%s: the 'gripper' section has no %s" % (path, ', '.join(missing)))
+    return spec
+
+
+class RegisterScale(object):
+    """The 2F-140's position register (gPO, rPR) <-> the opening between its pads, in m.
+
+    2F-85 & 2F-140 Instruction Manual, section 4: the register is a position
+    scale, 0x00 full opening .. 0xFF full closing. A unit reports `gpo_open`
+    fully open and `gpo_closed` fully closed (config/sim_devices.yaml has the
+    defaults and their sources), and the opening is linear in between:
+    ``stroke * (gpo_closed - gPO) / (gpo_closed - gpo_open)``, clamped to 0..stroke.
+    """
+
+    def __init__(self, stroke, gpo_open, gpo_closed):
+        if not (stroke > 0 and 0 <= gpo_open < gpo_closed <= 255):
+            raise ValueError('need stroke > 0 and 0 <= gpo_open < gpo_closed <= 255, got %r, %r, %r'
+                             % (stroke, gpo_open, gpo_closed))
+        self.stroke, self.gpo_open, self.gpo_closed = float(stroke), float(gpo_open), float(gpo_closed)
+
+    @property
+    def counts_per_metre(self):
+        return (self.gpo_closed - self.gpo_open) / self.stroke
+
+    def opening(self, gpo):
+        """Pad opening (m) for position register value `gpo`."""
+        width = (self.gpo_closed - float(gpo)) / self.counts_per_metre
+        return min(max(width, 0.0), self.stroke)
+
+    def position(self, opening):
+        """Position register value (float) for a pad opening of `opening` m."""
+        return self.gpo_closed - float(opening) * self.counts_per_metre
 
 
 def step_toward(current, target, speed, dt):
@@ -37,13 +69,27 @@ def step_toward(current, target, speed, dt):
     return current + np.copysign(reach, delta)
 
 
-def _pad_thickness(link_element):
-    """Box size of a pad link (collision first, else visual), or None if it is no box."""
-    for tag in ('collision', 'visual'):
-        for part in link_element.getElementsByTagName(tag):
-            for box in part.getElementsByTagName('box'):
-                return [float(v) for v in box.getAttribute('size').split()]
+def _pad_box(link):
+    """Box size of a pad link (urdf_parser_py; collision first, else visual), or None if it is no box."""
+    for part in list(link.collisions) + list(link.visuals):
+        size = getattr(part.geometry, 'size', None)
+        if size is not None:
+            return [float(v) for v in size]
     return None
+
+
+def pad_gap(left, right, box):
+    """Gap between the inner faces of two pads with poses `left`, `right` (4x4) and box size `box`.
+
+    The pad normal is the pad axis best aligned with the line between the
+    pads' centres; the gap is the centres' distance along it, less one pad
+    thickness (half of each pad's box along that axis).
+    """
+    centres = right[:3, 3] - left[:3, 3]
+    axes = left[:3, :3]
+    k = int(np.argmax(np.abs(axes.T.dot(centres))))
+    normal = axes[:, k] * np.sign(axes[:, k].dot(centres))
+    return float(normal.dot(centres) - box[k])
 
 
 class GripperKinematics(object):
@@ -71,40 +117,32 @@ class GripperKinematics(object):
     open). ``min_opening`` / ``max_opening`` give the values for the model
     at hand.
 
-    Commands on the nominal stroke
-    ------------------------------
-    Commands and reported positions of the simulated gripper use the real
-    device's scale, 0..``stroke`` (0.140 m). ``command_to_opening`` maps that
-    range linearly onto the model's [min_opening, max_opening] (scaling, not
-    clamping). Reasons: (1) the real gripper's position register spans its
-    whole travel for 0..stroke, so the full command range must drive the
-    full joint range 0..0.7 rad; (2) with clamping, every command between
-    the model's maximum and 0.140 m would land on the same angle and could
-    never be reported back as reached, so a client waiting for "position
-    reached" would stall; (3) the mapping stays one-to-one, so a joint angle
-    turns back into exactly the command that produced it. The price is a
-    scale error of at most about 8 % between the command and the pad gap
-    drawn by the model, which only matters for the model's looks.
+    Registers to the model
+    ----------------------
+    The gripper's position register is turned into an opening by
+    RegisterScale (the real stroke, 0..0.140 m) and the opening into an angle
+    here, through these kinematics: a pad gap the model can show is shown
+    exactly; a wider one (the model's last 11.5 mm) shows as fully open.
     """
 
-    def __init__(self, urdf_text, prefix='', stroke=0.140, samples=200):
+    def __init__(self, urdf_text, prefix='', samples=200):
         self.model = kinematics.Model(urdf_text)
         self.joint_name = prefix + FINGER_JOINT
         if self.joint_name not in self.model.joints:
             raise ValueError("the model has no joint '%s'" % self.joint_name)
         joint = self.model.joints[self.joint_name]
-        if joint.lower is None or joint.upper is None or not joint.upper > joint.lower:
+        limit = joint.limit
+        if limit is None or limit.lower is None or limit.upper is None or not limit.upper > limit.lower:
             raise ValueError("joint '%s' has no usable <limit>" % self.joint_name)
-        self.lower, self.upper = joint.lower, joint.upper
-        self.stroke = float(stroke)
+        self.lower, self.upper = limit.lower, limit.upper
         base = joint.parent
         self._chains = []
         for pad in PADS:
-            if prefix + pad not in self.model.link_elements:
+            if prefix + pad not in self.model.robot.link_map:
                 raise ValueError("the model has no link '%s'" % (prefix + pad))
             self._chains.append(self.model.chain(base, prefix + pad))
-        box = _pad_thickness(self.model.link_elements[prefix + PADS[0]])
-        self._box = np.asarray(box if box else (0.0, 0.0, 0.0), dtype=float)
+        box = _pad_box(self.model.robot.link_map[prefix + PADS[0]])
+        self.pad_thickness = tuple(box) if box else (0.0, 0.0, 0.0)
         self.angles = np.linspace(self.lower, self.upper, int(samples))
         self.openings = np.array([self.opening_exact(a) for a in self.angles])
         if not np.all(np.diff(self.openings) < 0):
@@ -121,12 +159,7 @@ class GripperKinematics(object):
     def opening_exact(self, angle):
         """Gap between the pads' inner faces at `angle`, from forward kinematics."""
         left, right = self.pad_poses(angle)
-        centres = right[:3, 3] - left[:3, 3]
-        axes = left[:3, :3]
-        # The pad normal is the pad axis best aligned with the line between the pads.
-        k = int(np.argmax(np.abs(axes.T.dot(centres))))
-        normal = axes[:, k] * np.sign(axes[:, k].dot(centres))
-        return float(normal.dot(centres) - self._box[k])
+        return pad_gap(left, right, self.pad_thickness)
 
     # -- public mapping ------------------------------------------------------
 
@@ -173,20 +206,3 @@ class GripperKinematics(object):
         """
         # np.interp needs increasing x: the openings decrease along the table.
         return float(np.interp(-float(opening), -self.openings, self.angles))
-
-    def command_to_opening(self, command):
-        """Model pad gap for a command on the nominal stroke (see the class docstring)."""
-        c = min(max(float(command), 0.0), self.stroke)
-        return self.min_opening + (c / self.stroke) * (self.max_opening - self.min_opening)
-
-    def opening_to_command(self, opening):
-        """Inverse of command_to_opening."""
-        span = self.max_opening - self.min_opening
-        c = (float(opening) - self.min_opening) / span * self.stroke
-        return min(max(c, 0.0), self.stroke)
-
-    def command_to_angle(self, command):
-        return self.angle(self.command_to_opening(command))
-
-    def angle_to_command(self, angle):
-        return self.opening_to_command(self.opening(angle))

@@ -1,173 +1,289 @@
-"""Simulated Robotiq 2F-140: moves finger_joint toward the commanded opening.
+"""Simulated Robotiq 2F-140 behind the register interface of Robotiq's own driver.
 
-Subscribes ``gripper/command`` (std_msgs/Float64): the opening between the
-fingers in metres, 0.0 (closed) to 0.140 (open), the device's stroke.
-Publishes at ``~rate`` ``gripper/joint_states`` (sensor_msgs/JointState, the
-one joint ``<prefix>finger_joint``; the mimic joints follow it in
-robot_state_publisher / joint_state_publisher) and ``gripper/opening``
-(std_msgs/Float64, the current opening on the same 0..0.140 scale).
+The real drivers (robotiq_2f_gripper_control's Robotiq2FGripperRtuNode.py and
+Robotiq2FGripperTcpNode.py, node name ``robotiq2FGripper``) subscribe
+``Robotiq2FGripperRobotOutput`` (Robotiq2FGripper_robot_output: rACT rGTO
+rATR rPR rSP rFR) and publish ``Robotiq2FGripperRobotInput``
+(Robotiq2FGripper_robot_input: gACT gGTO gSTA gOBJ gFLT gPR gPO gCU). This
+node does the same, with the registers behaving as the 2F-85 & 2F-140
+Instruction Manual (section 4, "Control") describes them:
 
-The opening moves toward the last valid command at ``~speed`` m/s. The
-opening -> finger_joint mapping comes from the model's own finger kinematics
-(gripper_model.GripperKinematics, read from ``robot_description``): 0.140 is
-0.0 rad (open), 0.0 is the joint's upper limit (closed); see that class for
-how the nominal stroke maps onto the model's pad gap.
+* rACT 0 -> 1 starts the activation: gACT 1, gSTA 1 for ``activation_time``,
+  then gSTA 3. rACT 0 resets the gripper and clears faults (all status 0).
+* Before the activation is complete a motion request (rGTO 1) does nothing:
+  gFLT 0x07 while rACT is 0 ("the activation bit must be set prior to
+  action"), 0x05 while activating ("action delayed"; it runs afterwards).
+* rGTO 1 moves toward rPR (0 open .. 255 closed, within the unit's
+  ``gpo_open`` .. ``gpo_closed``) at the speed rSP selects (min_speed ..
+  max_speed); rGTO 0 stops the fingers where they are. gGTO echoes rGTO,
+  gPR echoes rPR, gPO is the actual position, gCU a plausible current
+  (moving, or holding with a force from rFR; see config/sim_devices.yaml).
+* gOBJ: 0 while moving, 2 when closing stopped on the simulated object
+  (``~object_width``, m between the pads; unset: none), 3 at the requested
+  position. The manual says to ignore gOBJ while gGTO is 0; after a stop it
+  reads 3 here, so that a client waiting for the fingers to stop sees it.
+* rATR 1 (with rACT 1) starts the automatic release: it overrides every
+  other request, opens slowly (min_speed) to the mechanical end (gPO 0) with
+  gFLT 0x0B, then reports gFLT 0x0F and moves no more until a reset (rACT 0).
+* rACT, rGTO and rATR are bits; a larger value is taken as 1, which is what
+  Robotiq's driver sends to the device for it (baseRobotiq2FGripper's
+  verifyCommand clamps each to 0..1), with one warning per register and
+  RATE_LIMIT seconds.
 
-A NaN, infinite or out-of-range command is ignored with one warning naming
-the valid range; the node keeps its last valid target. The warning is given
-once per kind of bad command (not a number, infinite, below 0, above the
-stroke) and again only after a valid command came in between and at least
-REWARN_AFTER seconds later, so neither a flood of bad commands nor one that
-alternates bad and good ones can flood the log.
-
-Private parameters (defaults from config/sim_devices.yaml):
-  ~prefix            ''  ; prefix of the model's joints
-  ~rate              50 Hz
-  ~speed             0.250 m/s (the 2F-140's maximum closing speed)
-  ~initial_opening   0.140 m (open, like finger_joint = 0)
-  ~devices_file      config/sim_devices.yaml
+Private parameters (defaults from ``gripper`` in config/sim_devices.yaml):
+  ~rate             50 Hz, status publishing rate
+  ~object_width     unset ; m between the pads: closing stops there (gOBJ 2)
+  ~initial_position gpo_open ; gPO at start-up (in reset, like a power-up)
+  ~devices_file     config/sim_devices.yaml
 """
 
 import math
+import threading
 import time
 
 from ur3_ft_gripper_description import gripper_model, node_loop, sim_params
 
-# Fine enough that the interpolated angle is within 1e-6 rad of the exact
-# inverse (test_sim_models checks it), cheap enough to build at start-up.
-ANGLE_TABLE_SAMPLES = 4001
+# A kind of nonsense register value is warned about at most once per this many seconds.
+RATE_LIMIT = 10.0
 
-# A kind of bad command is warned about at most once per this many seconds.
-REWARN_AFTER = 1.0
+FAULT_NONE = 0x00
+FAULT_ACTION_DELAYED = 0x05       # activation must be completed prior to action
+FAULT_ACTIVATION_BIT = 0x07       # the activation bit must be set prior to action
+FAULT_AUTO_RELEASE_ACTIVE = 0x0B  # automatic release in progress
+FAULT_AUTO_RELEASE_DONE = 0x0F    # automatic release completed
 
-
-def command_problem(value, stroke):
-    """None if `value` is a valid opening command, else (kind, description)."""
-    if math.isnan(value):
-        return 'nan', 'not a number'
-    if math.isinf(value):
-        return 'inf', 'infinite'
-    if value < 0.0:
-        return 'below', 'below 0.0 (closed)'
-    if value > stroke:
-        return 'above', 'above %g (open)' % stroke
-    return None
+STATUS_FIELDS = ('gACT', 'gGTO', 'gSTA', 'gOBJ', 'gFLT', 'gPR', 'gPO', 'gCU')
+COMMAND_FIELDS = ('rACT', 'rGTO', 'rATR', 'rPR', 'rSP', 'rFR')
+BITS = ('rACT', 'rGTO', 'rATR')
 
 
-class GripperState(object):
-    """Target and current opening, and the motion between them (no ROS)."""
+class GripperSpec(object):
+    """The device figures of the ``gripper`` section of config/sim_devices.yaml."""
 
-    def __init__(self, stroke, speed, initial_opening, log_warn, clock=time.monotonic):
-        self.stroke = stroke
-        self.speed = speed
-        self.opening = initial_opening
-        self.target = initial_opening
+    KEYS = ('stroke', 'min_speed', 'max_speed', 'gpo_open', 'gpo_closed', 'activation_time',
+            'moving_current', 'max_grip_current')
+
+    def __init__(self, spec):
+        for key in self.KEYS:
+            setattr(self, key, float(spec[key]))
+        self.scale = gripper_model.RegisterScale(self.stroke, self.gpo_open, self.gpo_closed)
+
+    def speed_counts(self, rsp):
+        """Finger speed in position counts per second for speed register `rsp`."""
+        metres = self.min_speed + (self.max_speed - self.min_speed) * rsp / 255.0
+        return metres * self.scale.counts_per_metre
+
+
+class RegisterGripper(object):
+    """The 2F-140's registers and finger motion (no ROS). Time in seconds, from `advance`."""
+
+    def __init__(self, spec, log_warn, object_width=None, initial_position=None,
+                 clock=time.monotonic):
+        self.spec = spec
         self._warn = log_warn
         self._clock = clock
-        self._warned = set()   # kinds warned about since the last valid command
-        self._last_warning = {}  # kind -> clock() of its last warning
+        self._last_warning = {}
+        self.object_position = (None if object_width is None
+                                else spec.scale.position(object_width))
+        self.command = dict.fromkeys(COMMAND_FIELDS, 0)
+        self.position = float(spec.gpo_open if initial_position is None else initial_position)
+        self.target = self.position
+        self.state = 'reset'  # reset, activating, active, releasing, released
+        self.activation_left = 0.0
+        self.fault = FAULT_NONE
+        self.object_status = 0
+        self.moving = False
+        self.holding = False
 
-    def command(self, value):
-        """Take `value` as the new target if valid; returns whether it was taken."""
-        value = float(value)
-        problem = command_problem(value, self.stroke)
-        if problem is None:
-            self.target = value
-            self._warned.clear()
-            return True
-        kind, what = problem
+    # -- commands ------------------------------------------------------------
+
+    def _bit(self, name, value):
+        if value in (0, 1):
+            return value
         now = self._clock()
-        if kind not in self._warned and now - self._last_warning.get(kind, -math.inf) >= REWARN_AFTER:
-            self._warned.add(kind)
-            self._last_warning[kind] = now
-            self._warn('gripper_sim: ignored gripper/command %r: %s; the opening must be between '
-                       '0.0 (closed) and %g (open) m. Keeping the target %.4f m.'
-                       % (value, what, self.stroke, self.target))
-        return False
+        if now - self._last_warning.get(name, -math.inf) >= RATE_LIMIT:
+            self._last_warning[name] = now
+            self._warn('gripper_sim: %s=%d is not a bit; taken as 1, as Robotiq\'s driver sends it '
+                       '(send 0 or 1)' % (name, value))
+        return 1
+
+    def set_command(self, registers):
+        """Take a Robotiq2FGripper_robot_output as a dict of its six fields."""
+        values = {name: int(registers[name]) for name in COMMAND_FIELDS}
+        for name in BITS:
+            values[name] = self._bit(name, values[name])
+        for name in ('rPR', 'rSP', 'rFR'):
+            values[name] = min(max(values[name], 0), 255)
+        previous, self.command = self.command, values
+        if values['rACT'] == 0:
+            self._reset()
+            return
+        if previous['rACT'] == 0 and self.state == 'reset':
+            self.state = 'activating'
+            self.activation_left = self.spec.activation_time
+            self.moving = False
+        if self.state in ('releasing', 'released'):
+            return  # the automatic release overrides everything but rACT
+        if values['rATR']:
+            self.state = 'releasing'
+            self.fault = FAULT_AUTO_RELEASE_ACTIVE
+            self.target = 0.0  # the mechanical end beyond the software limit
+            self.moving, self.holding = True, False
+            return
+        if self.state == 'active':
+            self._request(previous)
+
+    def _reset(self):
+        self.state = 'reset'
+        self.fault = FAULT_NONE
+        self.object_status = 0
+        self.moving = self.holding = False
+        self.target = self.position
+
+    def _request(self, previous):
+        """A command while active: start, change or stop a motion."""
+        c = self.command
+        if not c['rGTO']:
+            self.moving = False
+            self.object_status = 3 if not self.holding else self.object_status
+            return
+        if previous['rGTO'] and all(c[k] == previous[k] for k in ('rPR', 'rSP', 'rFR')):
+            return
+        self.target = float(min(max(c['rPR'], self.spec.gpo_open), self.spec.gpo_closed))
+        closing = self.target > self.position
+        if self.holding and closing:
+            return  # still squeezing the object: nothing changes
+        self.holding = False
+        self.moving = True
+        self.object_status = 0
+
+    # -- time ----------------------------------------------------------------
 
     def advance(self, dt):
-        """Move toward the target for `dt` seconds; returns the new opening."""
-        self.opening = gripper_model.step_toward(self.opening, self.target, self.speed, max(dt, 0.0))
-        return self.opening
+        """Let `dt` seconds pass."""
+        dt = max(float(dt), 0.0)
+        c = self.command
+        if self.state == 'activating':
+            self.activation_left -= dt
+            if c['rGTO']:
+                self.fault = FAULT_ACTION_DELAYED
+            if self.activation_left <= 0.0:
+                self.state = 'active'
+                self.fault = FAULT_NONE
+                self._request(dict(c, rGTO=0))  # a request made while activating runs now
+            return
+        if self.state == 'reset':
+            self.fault = FAULT_ACTIVATION_BIT if c['rGTO'] else FAULT_NONE
+            return
+        if self.state == 'released':
+            return
+        if not self.moving:
+            return
+        speed = (self.spec.speed_counts(0) if self.state == 'releasing'
+                 else self.spec.speed_counts(c['rSP']))
+        start = self.position
+        self.position = gripper_model.step_toward(start, self.target, speed, dt)
+        if self.state == 'releasing':
+            if self.position == self.target:
+                self.state, self.fault, self.moving = 'released', FAULT_AUTO_RELEASE_DONE, False
+            return
+        obj = self.object_position
+        if obj is not None and start <= obj < self.position:
+            self.position = obj
+            self.moving, self.holding, self.object_status = False, True, 2
+        elif self.position == self.target:
+            self.moving, self.object_status = False, 3
+
+    # -- status --------------------------------------------------------------
+
+    def status(self):
+        """Robotiq2FGripper_robot_input fields as a dict."""
+        c = self.command
+        active = self.state == 'active'
+        if self.moving and self.state in ('active', 'releasing'):
+            current = self.spec.moving_current
+        elif self.holding and active:
+            current = self.spec.max_grip_current * c['rFR'] / 255.0
+        else:
+            current = 0
+        return dict(
+            gACT=c['rACT'],
+            gGTO=c['rGTO'] if active else 0,
+            gSTA={'reset': 0, 'activating': 1, 'active': 3}.get(self.state, 0),
+            gOBJ=self.object_status if active else 0,
+            gFLT=self.fault,
+            gPR=c['rPR'] if c['rACT'] else 0,
+            gPO=int(round(min(max(self.position, 0.0), 255.0))),
+            gCU=int(round(current)))
+
+
+def spec_from_params(get_param):
+    return sim_params.from_devices_file(get_param, lambda path: GripperSpec(
+        gripper_model.load_gripper_spec(path, GripperSpec.KEYS)))
 
 
 def settings_from_params(get_param):
-    """(prefix, rate, speed, stroke, initial_opening, warnings) from private parameters."""
-    spec = sim_params.from_devices_file(get_param, gripper_model.load_gripper_spec)
-    prefix = sim_params.prefix(get_param)
-    stroke = spec['stroke']
-    speed = sim_params.number(get_param, '~speed', spec.get('max_speed', 0.25), strictly_above=0.0)
-    initial = sim_params.number(get_param, '~initial_opening', stroke, minimum=0.0)
-    if initial > stroke:
-        raise sim_params.ParamError('~initial_opening=%r must be between 0.0 and %g' % (initial, stroke))
-    notes = []
-    low, high = spec.get('min_speed'), spec.get('max_speed')
-    if low is not None and high is not None and not low <= speed <= high:
-        notes.append('gripper_sim: ~speed=%g m/s is outside the real 2F-140 range %g..%g m/s'
-                     % (speed, low, high))
-    return dict(prefix=prefix, stroke=stroke, speed=speed, initial_opening=initial,
-                rate=sim_params.number(get_param, '~rate', 50.0, strictly_above=0.0),
-                notes=notes)
+    """(spec, rate, object_width, initial_position) from private parameters; ParamError if bad."""
+    spec = spec_from_params(get_param)
+    rate = sim_params.number(get_param, '~rate', 50.0, strictly_above=0.0)
+    width = get_param('~object_width', None)
+    if width is not None:
+        width = sim_params.number(get_param, '~object_width', None, minimum=0.0)
+        if width > spec.stroke:
+            raise sim_params.ParamError('~object_width=%r m is wider than the %g m stroke: the '
+                                        'gripper could not hold it' % (width, spec.stroke))
+    initial = sim_params.number(get_param, '~initial_position', spec.gpo_open, minimum=0.0)
+    if initial > 255:
+        raise sim_params.ParamError('~initial_position=%r must be a position register value '
+                                    '0..255' % (initial,))
+    return spec, rate, width, initial
 
 
 def run(rospy):
-    """The node: parameters, model, subscriber, publish loop. Returns the exit status."""
-    from sensor_msgs.msg import JointState
-    from std_msgs.msg import Float64
+    """The node: parameters, subscriber, status loop. Returns the exit status."""
+    from robotiq_2f_gripper_control.msg import (Robotiq2FGripper_robot_input,
+                                                Robotiq2FGripper_robot_output)
 
     try:
-        settings = settings_from_params(rospy.get_param)
+        spec, rate, width, initial = settings_from_params(rospy.get_param)
     except sim_params.ParamError as exc:
         rospy.logfatal('gripper_sim: bad parameter %s', exc)
         return 1
-    for note in settings['notes']:
-        rospy.logwarn(note)
-    if not rospy.has_param('robot_description'):
-        rospy.logfatal('gripper_sim: no robot_description parameter: load the model first '
-                       '(load_ur3_ft_gripper.launch), the finger kinematics come from it')
-        return 1
-    try:
-        fingers = gripper_model.GripperKinematics(rospy.get_param('robot_description'),
-                                                  prefix=settings['prefix'], stroke=settings['stroke'],
-                                                  samples=ANGLE_TABLE_SAMPLES)
-    except ValueError as exc:
-        rospy.logfatal('gripper_sim: robot_description has no usable 2F-140 (%s); check ~prefix', exc)
-        return 1
+    gripper = RegisterGripper(spec, rospy.logwarn, object_width=width, initial_position=initial)
+    publisher = rospy.Publisher('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
+                                queue_size=10)
 
-    state = GripperState(settings['stroke'], settings['speed'], settings['initial_opening'],
-                         rospy.logwarn)
-    joint_publisher = rospy.Publisher('gripper/joint_states', JointState, queue_size=10)
-    opening_publisher = rospy.Publisher('gripper/opening', Float64, queue_size=10)
-    rospy.Subscriber('gripper/command', Float64, lambda msg: state.command(msg.data), queue_size=100)
-    rospy.loginfo('gripper_sim: %s at %.4f m; commands on gripper/command (0.0 closed .. %g open)',
-                  fingers.joint_name, state.opening, settings['stroke'])
+    lock = threading.Lock()  # callbacks run in rospy's threads, the loop in this one
 
-    def angle_of(opening):
-        return fingers.table_angle(fingers.command_to_opening(opening))
+    def on_command(msg):
+        with lock:
+            gripper.set_command({name: getattr(msg, name) for name in COMMAND_FIELDS})
 
-    clock = {'time': rospy.Time.now(), 'angle': angle_of(state.opening)}
+    rospy.Subscriber('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output, on_command,
+                     queue_size=100)
+    rospy.loginfo('gripper_sim: 2F-140 in reset at gPO %d%s; activate with rACT 1 on '
+                  'Robotiq2FGripperRobotOutput', int(initial),
+                  '' if width is None else ', object of %g m between the pads' % width)
+    clock = {'time': rospy.Time.now()}
+    message = Robotiq2FGripper_robot_input()
 
     def step():
         now = rospy.Time.now()
-        dt = (now - clock['time']).to_sec()
-        opening = state.advance(dt)
-        angle = angle_of(opening)
-        joint_state = JointState()
-        joint_state.header.stamp = now
-        joint_state.name = [fingers.joint_name]
-        joint_state.position = [angle]
-        joint_state.velocity = [(angle - clock['angle']) / dt if dt > 0 else 0.0]
-        clock['time'], clock['angle'] = now, angle
-        joint_publisher.publish(joint_state)
-        opening_publisher.publish(Float64(opening))
+        with lock:
+            gripper.advance((now - clock['time']).to_sec())
+            status = gripper.status()
+        clock['time'] = now
+        for name, value in status.items():
+            setattr(message, name, value)
+        publisher.publish(message)
 
     def restart_clock():
         clock['time'] = rospy.Time.now()
 
-    return node_loop.run_at_rate(rospy, settings['rate'], step, on_time_jump=restart_clock)
+    return node_loop.run_at_rate(rospy, rate, step, on_time_jump=restart_clock)
 
 
 def main():
     import rospy
-    rospy.init_node('gripper_sim')
+    rospy.init_node('robotiq2FGripper')
     return run(rospy)

@@ -1,132 +1,95 @@
-"""Forward kinematics straight from URDF text (numpy only, no ROS master).
+"""Forward kinematics of a URDF, without a ROS master.
+
+urdf_parser_py reads the model and transforms3d does the rotations. The
+product along a chain stays here, a few lines: no Python library that is
+both a Noetic rosdep key and a Debian 12 package computes URDF forward
+kinematics with mimic joints (kdl_parser_py is not in Debian 12).
 
 Used where the package must compute from the model itself rather than from
-typed-in numbers: expected transforms in tests, the gripper opening <-> finger
-angle mapping, the TCP location.
+typed-in numbers: the pad gap <-> finger_joint mapping, the TCP pose, and the
+expected transforms in tests.
 """
 
-import xml.dom.minidom
-
 import numpy as np
+from transforms3d.axangles import axangle2mat
+from transforms3d.euler import euler2mat, mat2euler
+from transforms3d.quaternions import quat2mat
+from urdf_parser_py import xml_reflection
+from urdf_parser_py.urdf import URDF
+
+# urdf_parser_py reports every attribute it does not know (upstream meshes'
+# inertials carry some) on stderr; the model is read all the same.
+xml_reflection.core.on_error = lambda message: None
 
 
 def rpy_matrix(roll, pitch, yaw):
-    """Rotation matrix of URDF fixed-axis roll, pitch, yaw (Rz(yaw) Ry(pitch) Rx(roll))."""
-    cr, sr = np.cos(roll), np.sin(roll)
-    cp, sp = np.cos(pitch), np.sin(pitch)
-    cy, sy = np.cos(yaw), np.sin(yaw)
-    return np.array([
-        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-        [-sp, cp * sr, cp * cr]])
+    """Rotation matrix of URDF's fixed-axis roll, pitch, yaw."""
+    return euler2mat(roll, pitch, yaw, 'sxyz')
 
 
-def transform(xyz=(0, 0, 0), rpy=(0, 0, 0)):
+def matrix_rpy(rotation):
+    """URDF roll, pitch, yaw of a rotation matrix (inverse of rpy_matrix)."""
+    return tuple(float(angle) for angle in mat2euler(rotation, 'sxyz'))
+
+
+def pose_matrix(pose):
+    """4x4 matrix of a urdf_parser_py Pose (None: identity)."""
     t = np.eye(4)
-    t[:3, :3] = rpy_matrix(*rpy)
-    t[:3, 3] = xyz
+    if pose is not None:
+        t[:3, :3] = rpy_matrix(*(pose.rpy or (0.0, 0.0, 0.0)))
+        t[:3, 3] = pose.xyz or (0.0, 0.0, 0.0)
     return t
 
 
-def quaternion_matrix(x, y, z, w):
-    """Rotation matrix of a unit quaternion (as in geometry_msgs/Quaternion)."""
-    return np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+def motion_matrix(joint, position):
+    """Transform that a joint's own motion adds after its origin."""
+    t = np.eye(4)
+    axis = joint.axis or (1.0, 0.0, 0.0)  # URDF's default axis
+    if joint.type in ('revolute', 'continuous'):
+        t[:3, :3] = axangle2mat(axis, position)
+    elif joint.type == 'prismatic':
+        t[:3, 3] = np.asarray(axis, dtype=float) * position
+    return t
 
 
 def transform_msg_matrix(msg):
-    """4x4 matrix of a geometry_msgs/Transform."""
+    """4x4 matrix of a geometry_msgs/Transform (a tf2 lookup's)."""
     t = np.eye(4)
     q = msg.rotation
-    t[:3, :3] = quaternion_matrix(q.x, q.y, q.z, q.w)
-    t[:3, 3] = [msg.translation.x, msg.translation.y, msg.translation.z]
+    t[:3, :3] = quat2mat((q.w, q.x, q.y, q.z))
+    t[:3, 3] = (msg.translation.x, msg.translation.y, msg.translation.z)
     return t
 
 
-def axis_angle_matrix(axis, angle):
-    """Rotation about a unit axis (Rodrigues)."""
-    x, y, z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    k = np.array([[0, -z, y], [z, 0, -x], [-y, x, 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k.dot(k)
-
-
-def _floats(text, default):
-    return [float(v) for v in text.split()] if text else list(default)
-
-
-class Joint(object):
-    def __init__(self, element):
-        self.name = element.getAttribute('name')
-        self.type = element.getAttribute('type')
-        self.parent = element.getElementsByTagName('parent')[0].getAttribute('link')
-        self.child = element.getElementsByTagName('child')[0].getAttribute('link')
-        origin = element.getElementsByTagName('origin')
-        xyz = _floats(origin[0].getAttribute('xyz'), (0, 0, 0)) if origin else [0, 0, 0]
-        rpy = _floats(origin[0].getAttribute('rpy'), (0, 0, 0)) if origin else [0, 0, 0]
-        self.origin = transform(xyz, rpy)
-        axis = element.getElementsByTagName('axis')
-        self.axis = _floats(axis[0].getAttribute('xyz'), (1, 0, 0)) if axis else [1.0, 0.0, 0.0]
-        limit = element.getElementsByTagName('limit')
-        self.lower = float(limit[0].getAttribute('lower') or 0) if limit else None
-        self.upper = float(limit[0].getAttribute('upper') or 0) if limit else None
-        mimic = element.getElementsByTagName('mimic')
-        self.mimic = None
-        if mimic:
-            m = mimic[0]
-            self.mimic = (m.getAttribute('joint'),
-                          float(m.getAttribute('multiplier') or 1.0),
-                          float(m.getAttribute('offset') or 0.0))
-
-    def motion(self, position):
-        """Transform that the joint's own motion adds after its origin."""
-        t = np.eye(4)
-        if self.type in ('revolute', 'continuous'):
-            t[:3, :3] = axis_angle_matrix(self.axis, position)
-        elif self.type == 'prismatic':
-            t[:3, 3] = np.asarray(self.axis, dtype=float) * position
-        return t
-
-
 class Model(object):
-    """Links and joints of a URDF, with forward kinematics between any two links."""
+    """A URDF (urdf_parser_py's `robot`) with forward kinematics between any two links."""
 
     def __init__(self, urdf_text):
-        robot = xml.dom.minidom.parseString(urdf_text).documentElement
-        self.links = [e.getAttribute('name') for e in robot.childNodes
-                      if e.nodeType == e.ELEMENT_NODE and e.tagName == 'link']
-        self.joints = {}
-        for e in robot.childNodes:
-            if e.nodeType == e.ELEMENT_NODE and e.tagName == 'joint':
-                joint = Joint(e)
-                self.joints[joint.name] = joint
-        self.parent_joint = {j.child: j for j in self.joints.values()}
-        self.link_elements = {e.getAttribute('name'): e for e in robot.childNodes
-                              if e.nodeType == e.ELEMENT_NODE and e.tagName == 'link'}
+        self.robot = URDF.from_xml_string(urdf_text)
+        self.links = [link.name for link in self.robot.links]
+        self.joints = self.robot.joint_map
+        self.parent_joint = {joint.child: joint for joint in self.robot.joints}
 
     def root(self):
-        roots = [lk for lk in self.links if lk not in self.parent_joint]
+        roots = [link for link in self.links if link not in self.parent_joint]
         return roots[0] if len(roots) == 1 else None
-
-    def path_to_root(self, link):
-        path = [link]
-        while path[-1] in self.parent_joint:
-            path.append(self.parent_joint[path[-1]].parent)
-        return path
 
     def chain(self, from_link, to_link):
         """Joints from `from_link` down to `to_link` (which must be its descendant)."""
-        up = self.path_to_root(to_link)
-        if from_link not in up:
-            raise ValueError('%s is not above %s' % (from_link, to_link))
-        links = list(reversed(up[:up.index(from_link)]))
-        return [self.parent_joint[lk] for lk in links]
+        joints = []
+        link = to_link
+        while link != from_link:
+            if link not in self.parent_joint:
+                raise ValueError('%s is not above %s' % (from_link, to_link))
+            joints.append(self.parent_joint[link])
+            link = joints[-1].parent
+        return joints[::-1]
 
     def position(self, joint, positions):
-        if joint.mimic:
-            source, multiplier, offset = joint.mimic
-            return positions.get(source, 0.0) * multiplier + offset
+        if joint.mimic is not None:
+            mimic = joint.mimic
+            return (positions.get(mimic.joint, 0.0) * (1.0 if mimic.multiplier is None else mimic.multiplier)
+                    + (mimic.offset or 0.0))
         return positions.get(joint.name, 0.0)
 
     def chain_transform(self, joints, positions=None):
@@ -134,23 +97,11 @@ class Model(object):
         positions = positions or {}
         t = np.eye(4)
         for joint in joints:
-            t = t.dot(joint.origin).dot(joint.motion(self.position(joint, positions)))
+            t = t.dot(pose_matrix(joint.origin)).dot(motion_matrix(joint, self.position(joint, positions)))
         return t
-
-    def to_root(self, link, positions=None):
-        """Pose of `link` in the root frame."""
-        root = self.root()
-        return self.chain_transform(self.chain(root, link) if link != root else [], positions)
 
     def transform(self, from_link, to_link, positions=None):
         """Pose of `to_link` in `from_link` (what tf2 lookup_transform(from, to) returns)."""
-        return np.linalg.inv(self.to_root(from_link, positions)).dot(self.to_root(to_link, positions))
-
-
-def matrix_rpy(rotation):
-    """URDF roll, pitch, yaw of a rotation matrix (inverse of rpy_matrix, pitch in [-pi/2, pi/2])."""
-    r = np.asarray(rotation, dtype=float)
-    pitch = np.arctan2(-r[2, 0], np.hypot(r[0, 0], r[1, 0]))
-    if np.hypot(r[0, 0], r[1, 0]) < 1e-12:  # gimbal lock: put it all in roll
-        return float(np.arctan2(-r[1, 2], r[1, 1])), float(pitch), 0.0
-    return (float(np.arctan2(r[2, 1], r[2, 2])), float(pitch), float(np.arctan2(r[1, 0], r[0, 0])))
+        root = self.root()
+        to_root = [self.chain_transform(self.chain(root, link), positions) for link in (from_link, to_link)]
+        return np.linalg.inv(to_root[0]).dot(to_root[1])

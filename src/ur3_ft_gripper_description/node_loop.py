@@ -1,17 +1,62 @@
-"""The publish loop both simulated devices run: a step at a fixed rate until shutdown."""
+"""What every simulated-device node does around its own work: loop or spin, and a master restart.
+
+rospy registers a node's topics and services with the master once, at
+start-up. A restarted master knows nothing of them, so new subscribers would
+never find the node while it runs on. rospy offers no public way to register
+again, so the node does what ROS users expect instead: it notices the new
+master (its process id, from the master API, changes), says so in one line
+and exits; the launch files declare the nodes respawn="true", and roslaunch
+starts them again on the new master.
+"""
 
 import gc
+import socket
+import threading
+import xmlrpc.client
 
-from ur3_ft_gripper_description import master_watch
+# Seconds between two looks at the master.
+MASTER_CHECK_PERIOD = 1.0
+
+
+def watch_master(rospy, period=MASTER_CHECK_PERIOD):
+    """Shut this node down with one fatal line when the master is restarted.
+
+    Returns a dict whose 'restarted' turns True then; a daemon thread polls.
+    """
+    import rosgraph
+    name = rospy.get_name()
+    master = rosgraph.Master(name)
+    first = master.getPid()
+    state = {'restarted': False}
+    unreachable = (OSError, socket.error, xmlrpc.client.Error, rosgraph.MasterException)
+
+    def loop():
+        # Wall-clock waits: with use_sim_time and no clock, rospy.sleep would block forever.
+        pause = threading.Event()
+        while not rospy.is_shutdown():
+            pause.wait(period)
+            try:
+                pid = master.getPid()
+            except unreachable:
+                continue  # gone for now: existing connections keep working meanwhile
+            if pid != first:
+                state['restarted'] = True
+                rospy.logfatal('%s: the ROS master at %s was restarted and does not know this node: '
+                               'exiting (launch files start it again with respawn="true")'
+                               % (name, master.master_uri))
+                rospy.signal_shutdown('ROS master restarted')
+                return
+
+    threading.Thread(target=loop, name='watch_master', daemon=True).start()
+    return state
 
 
 def run_at_rate(rospy, hz, step, on_time_jump=None):
     """Call `step()` `hz` times a second until rospy shuts down; returns the exit status.
 
-    Also keeps the node registered across a master restart (master_watch), and
-    calls `on_time_jump()` when ROS time jumps back (a bag or simulation restarted).
+    Calls `on_time_jump()` when ROS time jumps back (a bag or simulation restarted).
     """
-    master = master_watch.start(rospy)
+    master = watch_master(rospy)
     # Everything made so far (modules, message classes, the model) lives as long as
     # the node: out of the collector's reach, a full collection no longer stops
     # the loop for ~20 ms (more on a loaded machine), which showed as message gaps.
@@ -26,4 +71,26 @@ def run_at_rate(rospy, hz, step, on_time_jump=None):
                 on_time_jump()
         except rospy.ROSInterruptException:
             break
-    return master.exit_status
+    return 1 if master['restarted'] else 0
+
+
+def spin(rospy):
+    """rospy.spin() for a callback-only node, with the master watch; returns the exit status."""
+    master = watch_master(rospy)
+    gc.freeze()
+    rospy.spin()
+    return 1 if master['restarted'] else 0
+
+
+def wait_for_param(rospy, name, warning, quiet=1.0, poll=0.2):
+    """The value of parameter `name` once it is set (None on shutdown); warns once after `quiet` s."""
+    pause = threading.Event()
+    waited = 0.0
+    while not rospy.is_shutdown():
+        if rospy.has_param(name):
+            return rospy.get_param(name)
+        if waited < quiet <= waited + poll:
+            rospy.logwarn(warning)
+        waited += poll
+        pause.wait(poll)
+    return None

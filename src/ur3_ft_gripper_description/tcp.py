@@ -20,10 +20,8 @@ differ by 1e-6 m and the mean is within 0.5e-6 m of either.
 import numpy as np
 
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.description import FINGER_JOINT, GRIPPER_BASE, PADS
 
-GRIPPER_BASE = 'robotiq_arg2f_base_link'
-FINGER_JOINT = 'finger_joint'
-PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 TCP_LINK = 'gripper_tcp'
 YAML_KEY = 'gripper_tcp_in_gripper_base'
 KEYS = ('x', 'y', 'z', 'roll', 'pitch', 'yaw')
@@ -34,7 +32,7 @@ MAX_SPREAD = 2e-6
 def tcp_matrix(model, prefix=''):
     """4x4 pose of the TCP in the gripper base frame, from a kinematics.Model."""
     joint = model.joints[prefix + FINGER_JOINT]
-    closed = {joint.name: joint.upper}
+    closed = {joint.name: joint.limit.upper}
     left, right = (model.transform(prefix + GRIPPER_BASE, prefix + pad, closed)[:3, 3] for pad in PADS)
     centre = (left + right) / 2.0
     z = centre / np.linalg.norm(centre)

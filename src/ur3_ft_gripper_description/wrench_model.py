@@ -1,24 +1,20 @@
-"""What a still FT 300 reads: the weight of its tool-side load, plus a zero offset.
-
-Pure numpy (no ROS imports), so the simulated sensor node and the unit tests
-share one implementation.
+"""What a still FT 300 reads: the weight of its tool-side load (no ROS imports).
 
 Conventions
 -----------
-* A wrench is a pair ``(force, torque)`` of numpy arrays of shape (3,), in
-  the sensor frame (``robotiq_ft_frame_id``: z out of the tool flange).
+* A wrench is (fx, fy, fz, tx, ty, tz) in the sensor frame
+  (``robotiq_ft_frame_id``: z out of the tool flange).
 * The reading is the load's weight as it acts on the sensor: with the sensor
   z axis pointing straight down, a hanging mass pulls along +z, so
   ``force = m * g * (unit gravity direction in the sensor frame)`` and
   ``torque = com x force`` (moment about the sensor origin).
-* Orientation: ``sensor_orientation`` is the rotation of the sensor frame in
-  a world frame whose z axis points up (the 3x3 rotation part of
-  tf2 ``lookup_transform(world, sensor)``, or of
-  ``kinematics.Model.transform(world, sensor)``). Gravity points along world
-  -z, so in the sensor frame it is ``R.T @ (0, 0, -1)``.
+* Gravity points along -z of a world frame; with R the sensor's orientation
+  in that frame, its direction in the sensor frame is ``R.T @ (0, 0, -1)``,
+  minus R's last row.
 """
 
 import dataclasses
+import math
 
 import numpy as np
 import yaml
@@ -44,6 +40,7 @@ class Payload(object):
     noise_force: float = 0.0
     noise_torque: float = 0.0
     rate: float = 100.0
+    identity: dict = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         self.mass = float(self.mass)
@@ -90,63 +87,22 @@ def load_payload(path):
                    frame_id=payload.get('frame_id', 'robotiq_ft_frame_id'),
                    noise_force=float(sensor.get('noise_force', 0.0)),
                    noise_torque=float(sensor.get('noise_torque', 0.0)),
-                   rate=float(sensor.get('rate', 100.0)))
+                   rate=float(sensor.get('rate', 100.0)),
+                   identity={key: str(sensor.get(key, 'UNKNOWN')) for key in
+                             ('serial_number', 'firmware_version', 'production_year')})
 
 
-def gravity_direction(gravity):
-    """Unit gravity direction in the sensor frame.
+def gravity_wrench(gx, gy, gz, mass, com, g=STANDARD_GRAVITY):
+    """(fx, fy, fz, tx, ty, tz) that a load of `mass` at `com` puts on the sensor at rest.
 
-    `gravity` is either the 3x3 sensor orientation in a z-up world frame (see
-    the module docstring) or a 3-vector already in the sensor frame (only its
-    direction is used).
+    (gx, gy, gz) is the direction of gravity in the sensor frame (any length).
+    Plain floats: the simulated sensor calls this 100 to 1000 times a second,
+    and numpy's call overhead on 3-vectors cost more than the arithmetic.
     """
-    g = np.asarray(gravity, dtype=float)
-    if g.shape == (3, 3):
-        direction = g.T.dot([0.0, 0.0, -1.0])
-    elif g.reshape(-1).shape == (3,):
-        direction = g.reshape(-1)
-    else:
-        raise ValueError('gravity must be a 3x3 rotation or a 3-vector, got shape %s' % (g.shape,))
-    norm = np.linalg.norm(direction)
-    if not np.isfinite(norm) or norm == 0.0:
-        raise ValueError('gravity direction is zero or not finite: %r' % (direction,))
-    return direction / norm
-
-
-def gravity_wrench(gravity, mass, com, g=STANDARD_GRAVITY):
-    """(force, torque) that a load of `mass` at `com` puts on the sensor at rest."""
-    force = float(mass) * float(g) * gravity_direction(gravity)
-    torque = np.cross(_vec3(com, 'com'), force)
-    return force, torque
-
-
-def add_noise(wrench, noise_force, noise_torque, rng=None):
-    """`wrench` plus white Gaussian noise of the given standard deviations."""
-    rng = rng if rng is not None else np.random.default_rng()
-    force, torque = wrench
-    return (np.asarray(force, dtype=float) + rng.normal(0.0, noise_force, 3),
-            np.asarray(torque, dtype=float) + rng.normal(0.0, noise_torque, 3))
-
-
-class ZeroOffset(object):
-    """The sensor's "zero" (bias) command: remember a wrench and subtract it."""
-
-    def __init__(self):
-        self.clear()
-
-    def set(self, wrench):
-        force, torque = wrench
-        self.force = _vec3(force, 'offset force').copy()
-        self.torque = _vec3(torque, 'offset torque').copy()
-
-    def clear(self):
-        self.force = np.zeros(3)
-        self.torque = np.zeros(3)
-
-    @property
-    def is_set(self):
-        return bool(np.any(self.force) or np.any(self.torque))
-
-    def apply(self, wrench):
-        force, torque = wrench
-        return (_vec3(force, 'force') - self.force, _vec3(torque, 'torque') - self.torque)
+    norm = math.sqrt(gx * gx + gy * gy + gz * gz)
+    if not math.isfinite(norm) or norm == 0.0:
+        raise ValueError('gravity direction is zero or not finite: %r' % ((gx, gy, gz),))
+    scale = float(mass) * g / norm
+    fx, fy, fz = scale * gx, scale * gy, scale * gz
+    cx, cy, cz = com
+    return (fx, fy, fz, cy * fz - cz * fy, cz * fx - cx * fz, cx * fy - cy * fx)

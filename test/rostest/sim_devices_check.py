@@ -13,10 +13,11 @@ import tf2_ros
 from geometry_msgs.msg import WrenchStamped
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
-from std_srvs.srv import Trigger
+from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
+from robotiq_ft_sensor.msg import ft_sensor
+from robotiq_ft_sensor.srv import sensor_accessor
 
-from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description import gripper_model, kinematics
 
 G = 9.80665
 GRIPPER_MASS, GRIPPER_COM = 0.975, np.array([0.0, 0.0, 0.062])  # config/sim_devices.yaml
@@ -28,6 +29,8 @@ TOOL_DOWN = [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0]
 ZERO = [0.0] * 6  # the gripper points along base_link +y: horizontal
 SENSOR = 'robotiq_ft_frame_id'
 TIMEOUT = 20.0
+# The stream's resolution, 0.01 N and 0.001 Nm: a reading is within half a count of the exact wrench.
+FORCE_ATOL, TORQUE_ATOL = 0.0051, 0.00051
 
 
 def expected_wrench(rotation, mass, com):
@@ -83,15 +86,27 @@ class SimDevicesTest(unittest.TestCase):
         cls.wrench = Recorder('robotiq_ft_wrench', WrenchStamped)
         cls.loaded = Recorder('loaded/robotiq_ft_wrench', WrenchStamped)
         cls.zeroing = Recorder('zeroing/robotiq_ft_wrench', WrenchStamped)
+        cls.stream = Recorder('robotiq_ft_sensor', ft_sensor)
+        cls.zeroing_stream = Recorder('zeroing/robotiq_ft_sensor', ft_sensor)
         cls.no_tf = Recorder('no_tf/robotiq_ft_wrench', WrenchStamped)
+        cls.no_tf_stream = Recorder('no_tf/robotiq_ft_sensor', ft_sensor)
         cls.rosout = Recorder('/rosout', Log)  # straight from the nodes: no rosout node needed
         cls.gripper_joints = Recorder('gripper/joint_states', JointState)
-        cls.opening = Recorder('gripper/opening', Float64)
-        cls.command = rospy.Publisher('gripper/command', Float64, queue_size=10)
+        cls.gripper_status = Recorder('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input)
+        cls.holding_status = Recorder('holding/Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input)
+        cls.real_joints = Recorder('real_unit/gripper/joint_states', JointState)
+        cls.command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
+                                      queue_size=10)
+        cls.holding_command = rospy.Publisher('holding/Robotiq2FGripperRobotOutput',
+                                              Robotiq2FGripper_robot_output, queue_size=10)
+        cls.real_status = rospy.Publisher('real_unit/Robotiq2FGripperRobotInput',
+                                          Robotiq2FGripper_robot_input, queue_size=300)
+        cls.fingers = gripper_model.GripperKinematics(rospy.get_param('robot_description'))
         threading.Thread(target=cls._publish_joints, daemon=True).start()
-        end = time.monotonic() + TIMEOUT  # a command sent before gripper_sim listens is lost
-        while cls.command.get_num_connections() == 0 and time.monotonic() < end:
-            time.sleep(0.05)
+        end = time.monotonic() + TIMEOUT  # a command sent before the node listens is lost
+        for publisher in (cls.command, cls.holding_command, cls.real_status):
+            while publisher.get_num_connections() == 0 and time.monotonic() < end:
+                time.sleep(0.05)
 
     @classmethod
     def _publish_joints(cls):
@@ -137,21 +152,14 @@ class SimDevicesTest(unittest.TestCase):
         return [m.msg for m in self.rosout.since(0) if m.name == node and m.level == Log.WARN
                 and text in m.msg]
 
-    def wait_opening(self, value, timeout=TIMEOUT):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            if abs(self.opening.next_after(time.monotonic()).data - value) < 1e-9:
-                return
-        self.fail('the gripper never reached %g' % value)
-
     # -- ft300_sim -------------------------------------------------------------
 
     def test_tool_pointing_down_reads_the_gripper_weight_along_plus_z(self):
         rotation = self.move_to(TOOL_DOWN)
         self.assertAlmostEqual(rotation[2, 2], -1.0, places=6, msg='TOOL_DOWN must point the sensor down')
         force, torque = self.reading(self.wrench)
-        np.testing.assert_allclose(force, [0.0, 0.0, GRIPPER_MASS * G], atol=1e-4)
-        np.testing.assert_allclose(torque, [0.0, 0.0, 0.0], atol=1e-4)
+        np.testing.assert_allclose(force, [0.0, 0.0, GRIPPER_MASS * G], atol=FORCE_ATOL)
+        np.testing.assert_allclose(torque, [0.0, 0.0, 0.0], atol=TORQUE_ATOL)
 
     def test_wrench_follows_the_pose_in_tf(self):
         rng = np.random.default_rng(7)
@@ -159,48 +167,87 @@ class SimDevicesTest(unittest.TestCase):
             rotation = self.move_to(arm)
             force, torque = self.reading(self.wrench)
             expected_force, expected_torque = expected_wrench(rotation, GRIPPER_MASS, GRIPPER_COM)
-            np.testing.assert_allclose(force, expected_force, atol=1e-4, err_msg=str(arm))
-            np.testing.assert_allclose(torque, expected_torque, atol=1e-4, err_msg=str(arm))
+            np.testing.assert_allclose(force, expected_force, atol=FORCE_ATOL, err_msg=str(arm))
+            np.testing.assert_allclose(torque, expected_torque, atol=TORQUE_ATOL, err_msg=str(arm))
 
     def test_held_object_adds_its_weight_and_lever(self):
         self.move_to(TOOL_DOWN)
         force, _ = self.reading(self.loaded)
-        self.assertAlmostEqual(force[2], (GRIPPER_MASS + OBJECT_MASS) * G, places=3)
+        self.assertAlmostEqual(force[2], (GRIPPER_MASS + OBJECT_MASS) * G, delta=FORCE_ATOL)
         self.move_to(ZERO)  # horizontal: the weight acts on the combined lever arm
         _, torque = self.reading(self.loaded)
         lever = GRIPPER_MASS * GRIPPER_COM[2] + OBJECT_MASS * OBJECT_COM[2]
-        self.assertAlmostEqual(np.linalg.norm(torque), lever * G, places=3)
+        self.assertAlmostEqual(np.linalg.norm(torque), lever * G, delta=2 * TORQUE_ATOL)
 
-    def test_zero_service_makes_later_readings_relative(self):
-        zero = rospy.ServiceProxy('zeroing/robotiq_ft_zero', Trigger)
-        zero.wait_for_service(TIMEOUT)
+    def test_both_topics_carry_the_same_values_in_the_devices_resolution(self):
+        self.move_to(ZERO)
+        start = time.monotonic()
+        self.stream.next_after(start + 0.5)
+        wrenches = self.wrench.since(start)
+        streams = {(m.Fx, m.Fy, m.Fz, m.Mx, m.My, m.Mz) for m in self.stream.since(start)}
+        self.assertGreater(len(wrenches), 10)
+        for msg in wrenches:
+            force, torque = wrench_arrays(msg)
+            values = tuple(force) + tuple(torque)
+            self.assertIn(values, streams)  # float32 values, exactly the same
+            counts = np.array(values) / np.array([0.01] * 3 + [0.001] * 3)
+            np.testing.assert_allclose(counts, np.round(counts), atol=1e-3)
+            self.assertEqual(msg.header.frame_id, SENSOR)
+
+    def test_set_zero_makes_later_readings_on_both_topics_relative(self):
+        acc = rospy.ServiceProxy('zeroing/robotiq_ft_sensor_acc', sensor_accessor)
+        acc.wait_for_service(TIMEOUT)
         first = self.move_to(ZERO)
         self.reading(self.zeroing)  # a reading at this pose exists before zeroing
-        self.assertTrue(zero().success)
+        reply = acc(command_id=8, command='')
+        self.assertEqual((reply.success, reply.res), (True, 'Done'))
         force, torque = self.reading(self.zeroing)
-        np.testing.assert_allclose(np.concatenate([force, torque]), 0.0, atol=1e-4)
+        np.testing.assert_allclose(np.concatenate([force, torque]), 0.0, atol=1e-6)
+        zeroed = self.zeroing_stream.next_after(time.monotonic() + 0.05)
+        np.testing.assert_allclose([zeroed.Fx, zeroed.Fy, zeroed.Fz, zeroed.Mx, zeroed.My, zeroed.Mz],
+                                   0.0, atol=1e-6)
         second = self.move_to(TOOL_DOWN)
         force, torque = self.reading(self.zeroing)
         f1, t1 = expected_wrench(first, GRIPPER_MASS, GRIPPER_COM)
         f2, t2 = expected_wrench(second, GRIPPER_MASS, GRIPPER_COM)
-        np.testing.assert_allclose(force, f2 - f1, atol=1e-4)
-        np.testing.assert_allclose(torque, t2 - t1, atol=1e-4)
+        np.testing.assert_allclose(force, f2 - f1, atol=2 * FORCE_ATOL)
+        np.testing.assert_allclose(torque, t2 - t1, atol=2 * TORQUE_ATOL)
+
+    def test_accessor_answers_as_rq_sensor(self):
+        acc = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
+        acc.wait_for_service(TIMEOUT)
+        answers = {1: (True, 'SIM-0000'), 2: (True, 'SIM-0.0.0'), 4: (True, '2026'),
+                   3: (False, 'Unsupported command_id'), 0: (False, 'Unsupported command_id'),
+                   255: (False, 'Unsupported command_id')}
+        for command_id, expected in answers.items():
+            reply = acc(command_id=command_id, command='')
+            self.assertEqual((reply.success, reply.res), expected, command_id)
+        legacy = {'GET SNU': 'SIM-0000', 'GET FWV': 'SIM-0.0.0', 'GET PYE': '2026', 'GET XYZ': ''}
+        for command, res in legacy.items():
+            reply = acc(command_id=1, command=command)  # the string wins
+            self.assertEqual((reply.success, reply.res), (False, res), command)
+        time.sleep(0.5)  # /rosout delivery
+        deprecated = self.warnings_from('/robotiq_ft_sensor', 'command-string is deprecated')
+        self.assertEqual(len(deprecated), 1, deprecated)
+        unsupported = self.warnings_from('/robotiq_ft_sensor', "Unsupported command_id '3'")
+        self.assertEqual(len(unsupported), 1, unsupported)
 
     def test_unknown_sensor_frame_waits_warns_once_and_publishes_nothing(self):
         # Started from here, after the /rosout subscription, so that no warning can be missed.
-        rospy.set_param('no_tf/ft300_sim/frame_id', 'no_such_sensor_frame')
+        rospy.set_param('no_tf/robotiq_ft_sensor/frame_id', 'no_such_sensor_frame')
         launch = roslaunch.scriptapi.ROSLaunch()
         launch.start()
         try:
             process = launch.launch(roslaunch.core.Node(
-                'ur3_ft_gripper_description', 'ft300_sim', name='ft300_sim', namespace='/no_tf/'))
-            zero = rospy.ServiceProxy('no_tf/robotiq_ft_zero', Trigger)
-            zero.wait_for_service(TIMEOUT)
+                'ur3_ft_gripper_description', 'ft300_sim', name='robotiq_ft_sensor', namespace='/no_tf/'))
+            acc = rospy.ServiceProxy('no_tf/robotiq_ft_sensor_acc', sensor_accessor)
+            acc.wait_for_service(TIMEOUT)
             time.sleep(4.0)
             self.assertTrue(process.is_alive())
-            self.assertFalse(zero().success)  # serving, but nothing to zero
+            self.assertEqual(acc(command_id=1, command='').res, 'SIM-0000')  # serving meanwhile
             self.assertEqual(self.no_tf.since(0), [])
-            warnings = self.warnings_from('/no_tf/ft300_sim', 'waiting for TF')
+            self.assertEqual(self.no_tf_stream.since(0), [])
+            warnings = self.warnings_from('/no_tf/robotiq_ft_sensor', 'waiting for TF')
             self.assertEqual(len(warnings), 1, warnings)
             self.assertIn('no_such_sensor_frame', warnings[0])
         finally:
@@ -217,40 +264,70 @@ class SimDevicesTest(unittest.TestCase):
         finally:
             self.publishing.set()
         self.wrench.next_after(time.monotonic())  # resumes
-        warnings = self.warnings_from('/ft300_sim', 's old')
-        self.assertEqual(len(warnings), 1, [(m.level, m.msg) for m in self.rosout.since(0) if m.name == '/ft300_sim'])
+        warnings = self.warnings_from('/robotiq_ft_sensor', 's old')
+        self.assertEqual(len(warnings), 1, [(m.level, m.msg) for m in self.rosout.since(0)
+                                            if m.name == '/robotiq_ft_sensor'])
 
-    # -- gripper_sim -------------------------------------------------------------
+    # -- gripper_sim and gripper_joint_states ---------------------------------------
 
-    def test_gripper_closes_at_its_speed_to_the_joint_limit(self):
-        self.command.publish(Float64(0.140))
-        self.wait_opening(0.140)
+    def wait_status(self, recorder, check):
+        end = time.monotonic() + TIMEOUT
+        while time.monotonic() < end:
+            msg = recorder.next_after(time.monotonic())
+            if check(msg):
+                return msg
+        self.fail('the gripper status never matched; last: %s' % msg)
+
+    def activate(self, publisher, recorder):
+        publisher.publish(Robotiq2FGripper_robot_output())
+        self.wait_status(recorder, lambda s: s.gSTA == 0)
+        publisher.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=0, rSP=255, rFR=150))
+        self.wait_status(recorder, lambda s: s.gSTA == 3 and s.gOBJ == 3)
+
+    def test_gripper_closes_at_its_speed_and_the_joint_reaches_closed(self):
+        self.activate(self.command, self.gripper_status)
         t0 = time.monotonic()
-        self.command.publish(Float64(0.0))
-        self.wait_opening(0.0)
-        moving = [(r, m.data) for (r, m) in self.opening.items if r >= t0 and 0.01 < m.data < 0.13]
+        self.command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=150))
+        self.wait_status(self.gripper_status, lambda s: s.gPO == 230 and s.gOBJ == 3)
+        scale = gripper_model.RegisterScale(0.140, 3, 230)  # config/sim_devices.yaml
+        moving = [(r, scale.opening(m.gPO))
+                  for (r, m) in self.gripper_status.items if r >= t0 and 20 < m.gPO < 210]
         self.assertGreater(len(moving), 10)
-        slope = np.polyfit([r for r, _ in moving], [d for _, d in moving], 1)[0]
-        self.assertAlmostEqual(slope, -0.250, delta=0.04)  # m/s, the 2F-140's top speed
-        joint = self.gripper_joints.next_after(time.monotonic())
+        slope = np.polyfit([r for r, _ in moving], [o for _, o in moving], 1)[0]
+        self.assertAlmostEqual(slope, -0.250, delta=0.04)  # m/s, the 2F-140's top speed at rSP 255
+        joint = self.gripper_joints.next_after(time.monotonic() + 0.1)
         self.assertEqual(joint.name, ['finger_joint'])
-        upper = self.model.joints['finger_joint'].upper
-        self.assertAlmostEqual(joint.position[0], upper, places=6)  # closed = the joint's upper limit
+        self.assertAlmostEqual(self.fingers.opening(joint.position[0]), 0.0, places=6)  # pads touch
         angles = [m.position[0] for m in self.gripper_joints.since(t0)]
         self.assertTrue(all(b >= a - 1e-12 for a, b in zip(angles, angles[1:])), 'closing is monotonic')
 
-    def test_bad_commands_are_ignored_with_one_warning_each(self):
-        self.command.publish(Float64(0.07))
-        self.wait_opening(0.07)
-        for value in [float('nan'), float('inf'), -0.01, 0.5, 1e9, float('nan')]:
-            self.command.publish(Float64(value))
-            time.sleep(0.05)
-        time.sleep(0.5)
-        openings = [m.data for m in self.opening.since(time.monotonic() - 0.5)]
-        self.assertTrue(openings and all(o == 0.07 for o in openings), openings[-5:])
-        warnings = self.warnings_from('/gripper_sim', 'ignored gripper/command')
-        self.assertEqual(len(warnings), 4, warnings)  # nan, inf, below 0, above the stroke
-        self.assertTrue(all('between 0.0 (closed) and 0.14 (open)' in w for w in warnings))
+    def test_closing_on_a_part_stops_at_its_width(self):
+        self.activate(self.holding_command, self.holding_status)
+        self.holding_command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=255))
+        held = self.wait_status(self.holding_status, lambda s: s.gOBJ == 2)
+        self.assertAlmostEqual(gripper_model.RegisterScale(0.140, 3, 230).opening(held.gPO), 0.05, delta=0.0007)
+        self.assertGreater(held.gCU, 0)
+
+    def test_nonsense_registers_warn_once_and_act_as_the_driver_sends_them(self):
+        self.activate(self.command, self.gripper_status)
+        for _ in range(50):
+            self.command.publish(Robotiq2FGripper_robot_output(rACT=5, rGTO=9, rPR=100, rSP=255, rFR=150))
+        self.wait_status(self.gripper_status, lambda s: s.gPO == 100 and s.gOBJ == 3)
+        time.sleep(0.5)  # /rosout delivery
+        for register in ('rACT=5', 'rGTO=9'):
+            warnings = self.warnings_from('/robotiq2FGripper', register)
+            self.assertEqual(len(warnings), 1, warnings)
+
+    def test_joint_states_of_a_real_units_status_stream(self):
+        scale = gripper_model.RegisterScale(0.140, 6, 227)  # the node's ~gpo_open, ~gpo_closed
+        for gpo in [6, 0, 40, 116, 200, 227, 255] + list(range(6, 228, 7)):
+            status = Robotiq2FGripper_robot_input(gACT=1, gGTO=1, gSTA=3, gOBJ=3, gPR=gpo, gPO=gpo)
+            sent = time.monotonic()
+            self.real_status.publish(status)
+            joint = self.real_joints.next_after(sent)
+            self.assertEqual(joint.name, ['finger_joint'])
+            expected = min(scale.opening(gpo), self.fingers.max_opening)
+            self.assertAlmostEqual(self.fingers.opening(joint.position[0]), expected, delta=1e-5, msg=gpo)
 
 
 if __name__ == '__main__':

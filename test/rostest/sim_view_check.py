@@ -9,9 +9,9 @@ import rostest
 import tf2_ros
 from geometry_msgs.msg import WrenchStamped
 from sensor_msgs.msg import JointState
-from std_msgs.msg import Float64
+from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description import gripper_model, kinematics
 
 TIMEOUT = 20.0
 
@@ -25,33 +25,45 @@ class SimViewTest(unittest.TestCase):
         cls.buffer = tf2_ros.Buffer()
         cls.listener = tf2_ros.TransformListener(cls.buffer)
         cls.model = kinematics.Model(rospy.get_param('robot_description'))
-        cls.command = rospy.Publisher('gripper/command', Float64, queue_size=1)
+        cls.fingers = gripper_model.GripperKinematics(rospy.get_param('robot_description'),
+                                                      prefix=cls.prefix)
+        cls.command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
+                                      queue_size=1)
         end = time.monotonic() + TIMEOUT
         while cls.command.get_num_connections() == 0 and time.monotonic() < end:
             time.sleep(0.05)
 
     def pad_gap(self):
-        """Distance between the two finger pads' frames, from TF."""
-        left = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'left_inner_finger_pad',
-                                            rospy.Time(0), rospy.Duration(TIMEOUT))
-        right = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'right_inner_finger_pad',
-                                             rospy.Time(0), rospy.Duration(TIMEOUT))
-        a = kinematics.transform_msg_matrix(left.transform)[:3, 3]
-        b = kinematics.transform_msg_matrix(right.transform)[:3, 3]
-        return float(np.linalg.norm(a - b))
+        """Gap between the two finger pads' inner faces, from TF."""
+        poses = []
+        for pad in gripper_model.PADS:
+            msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + pad,
+                                               rospy.Time(0), rospy.Duration(TIMEOUT))
+            poses.append(kinematics.transform_msg_matrix(msg.transform))
+        return gripper_model.pad_gap(poses[0], poses[1], self.fingers.pad_thickness)
 
     def finger_angle(self):
         msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)
         return dict(zip(msg.name, msg.position))[self.prefix + 'finger_joint']
 
-    def settle(self, command):
-        self.command.publish(Float64(command))
+    def status(self):
+        return rospy.wait_for_message('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, TIMEOUT)
+
+    def settle(self, rpr, gpo):
+        """Send rPR; wait for gPO and for TF to show the angle gripper_joint_states gives for it."""
+        self.command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=rpr, rSP=255, rFR=150))
         end = time.monotonic() + TIMEOUT
         while time.monotonic() < end:
-            if abs(rospy.wait_for_message('gripper/opening', Float64, TIMEOUT).data - command) < 1e-9:
-                time.sleep(0.5)  # joint_state_publisher and robot_state_publisher catch up
+            s = self.status()
+            if s.gSTA == 3 and s.gPO == gpo and s.gOBJ == 3:
+                break
+        else:
+            self.fail('gPO never reached %d' % gpo)
+        target = rospy.wait_for_message('gripper/joint_states', JointState, TIMEOUT).position[0]
+        while time.monotonic() < end:
+            if abs(self.finger_angle() - target) < 1e-9:
                 return
-        self.fail('gripper/opening never reached %g' % command)
+        self.fail('joint_states never showed finger_joint %g' % target)
 
     def test_wrench_is_in_the_prefixed_sensor_frame(self):
         msg = rospy.wait_for_message('robotiq_ft_wrench', WrenchStamped, TIMEOUT)
@@ -60,16 +72,15 @@ class SimViewTest(unittest.TestCase):
         # The gripper's weight (0.975 kg) within a few noise deviations (0.1 N).
         self.assertAlmostEqual(np.linalg.norm([w.x, w.y, w.z]), 0.975 * 9.80665, delta=1.0)
 
-    def test_gripper_command_moves_the_fingers_in_tf(self):
-        self.settle(0.140)
+    def test_register_command_moves_the_fingers_in_tf(self):
+        self.settle(0, 3)  # activates as well (rACT 1 from reset)
         open_gap, open_angle = self.pad_gap(), self.finger_angle()
-        self.settle(0.0)
-        closed_gap, closed_angle = self.pad_gap(), self.finger_angle()
+        self.settle(255, 230)
+        closed_gap = self.pad_gap()
         self.assertAlmostEqual(open_angle, 0.0, places=6)
-        upper = self.model.joints[self.prefix + 'finger_joint'].upper
-        self.assertAlmostEqual(closed_angle, upper, places=6)
-        self.assertGreater(open_gap - closed_gap, 0.1, 'the pads close by more than 10 cm')
-        self.settle(0.140)
+        self.assertAlmostEqual(open_gap, self.fingers.max_opening, places=5)
+        self.assertAlmostEqual(closed_gap, 0.0, delta=1e-5)  # the pads touch
+        self.settle(0, 3)
         self.assertAlmostEqual(self.pad_gap(), open_gap, places=6)
 
 

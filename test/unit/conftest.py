@@ -17,7 +17,7 @@ UR_CONFIG_ROOT = os.path.join(rospkg.RosPack().get_path('ur_description'), 'conf
 EXPAND = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'expand_description')]
 EXPORT = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_urdf')]
 
-# Every model and toggle combination the package offers (issue 4).
+# Every model and toggle combination the package offers.
 UR_TYPES = description.ur_types()
 TOGGLES = [dict(ft_sensor=s, gripper=g) for s, g in itertools.product((True, False), repeat=2)]
 CONFIGURATIONS = [dict(ur_type=u, **t) for u in UR_TYPES for t in TOGGLES]
@@ -29,19 +29,68 @@ def configuration_id(config):
 
 
 class ExpandedModel(kinematics.Model):
-    """A model expanded by the package's own pipeline, with domain assertions."""
+    """A model expanded by the package's own pipeline (urdf_parser_py underneath), with domain assertions."""
 
     def __init__(self, urdf_text):
         super(ExpandedModel, self).__init__(urdf_text)
         self.text = urdf_text
 
+    # -- what the model says ---------------------------------------------------
+
+    def origin_xyz(self, joint):
+        return list(self.joints[joint].origin.xyz)
+
+    def limits(self, joint):
+        limit = self.joints[joint].limit
+        return (limit.lower, limit.upper)
+
+    def mimic_of(self, joint):
+        """(source joint, multiplier, offset) of a mimic joint, None for an actuated one."""
+        mimic = self.joints[joint].mimic
+        if mimic is None:
+            return None
+        return (mimic.joint, 1.0 if mimic.multiplier is None else mimic.multiplier, mimic.offset or 0.0)
+
+    def meshes(self, link=None):
+        """Mesh geometries (urdf_parser_py Mesh: filename, scale) of one link or of all."""
+        links = [self.robot.link_map[link]] if link else self.robot.links
+        return [part.geometry for lk in links for part in list(lk.visuals) + list(lk.collisions)
+                if hasattr(part.geometry, 'filename')]
+
+    def mass(self, link):
+        return self.robot.link_map[link].inertial.mass
+
+    def path_to_root(self, link):
+        """`link`, its parent, ... the root."""
+        return [link] + [joint.parent for joint in reversed(self.chain(self.root(), link))]
+
+    def to_root(self, link, positions=None):
+        return self.transform(self.root(), link, positions)
+
+    # -- domain assertions -----------------------------------------------------
+
+    def assert_contains_link(self, link):
+        assert link in self.links, 'the model has no link %s' % link
+
+    def assert_lacks_link(self, link):
+        assert link not in self.links, 'the model has a link %s' % link
+
     def assert_joint_between(self, parent, child, joint_type=None):
+        self.assert_contains_link(child)
         joint = self.parent_joint.get(child)
         assert joint is not None, 'no joint has child %s' % child
         assert joint.parent == parent, '%s hangs from %s, not %s' % (child, joint.parent, parent)
         if joint_type:
             assert joint.type == joint_type, '%s is %s, not %s' % (joint.name, joint.type, joint_type)
         return joint
+
+    def assert_mesh_resolves(self, mesh):
+        """A package:// URI of an upstream model package, naming a file that exists."""
+        uri = mesh.filename
+        assert uri.startswith('package://'), uri
+        package, _, relative = uri[len('package://'):].partition('/')
+        assert package in description.MODEL_PACKAGES, uri
+        assert os.path.isfile(os.path.join(rospkg.RosPack().get_path(package), relative)), uri
 
 
 @pytest.fixture
@@ -83,3 +132,14 @@ def run_export(*args, env=None):
 def run_expand(*args, env=None):
     return subprocess.run(EXPAND + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           universal_newlines=True, env=env, timeout=120)
+
+
+def assert_one_line_error(run, *words):
+    assert run.returncode == 1, run.stderr
+    assert run.stdout == '', 'a URDF was printed despite the error'
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1, run.stderr
+    assert lines[0].startswith('expand_description: error: ')
+    assert 'Traceback' not in run.stderr
+    for word in words:
+        assert word in lines[0], (word, lines[0])

@@ -5,18 +5,7 @@ import subprocess
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, UR_CONFIG, run_expand
-
-
-def assert_one_line_error(run, *words):
-    assert run.returncode == 1, run.stderr
-    assert run.stdout == '', 'a URDF was printed despite the error'
-    lines = run.stderr.strip().splitlines()
-    assert len(lines) == 1, run.stderr
-    assert lines[0].startswith('expand_description: error: ')
-    assert 'Traceback' not in run.stderr
-    for word in words:
-        assert word in lines[0], (word, lines[0])
+from conftest import PACKAGE_DIR, UR_CONFIG, assert_one_line_error, run_expand
 
 
 def kinematics_without(tmp_path, segment):
@@ -85,6 +74,32 @@ def test_missing_xacro(tmp_path):
 
 def test_unknown_xacro_file():
     assert_one_line_error(run_expand('/nonexistent/cell.xacro'), 'xacro file not found')
+
+
+CELL = """<robot name="cell" xmlns:xacro="http://wiki.ros.org/xacro">
+  <xacro:include filename="$(find ur3_ft_gripper_description)/urdf/inc/ur3_ft_gripper_macro.xacro"/>
+  %s
+</robot>
+"""
+ONE_ROBOT = '<xacro:ur3_ft_gripper prefix="%s"/>'
+TREE_FAULTS = {
+    # A user's cell that calls the macro twice with one prefix.
+    'same prefix twice': (ONE_ROBOT % 'r1_' + ONE_ROBOT % 'r1_', ["'r1_base_link' is not unique", 'own prefix']),
+    # Two robots, nothing joining them.
+    'two roots': (ONE_ROBOT % 'r1_' + ONE_ROBOT % 'r2_', ['Two root links', 'one root link']),
+    'dangling joint': (ONE_ROBOT % '' + '<joint name="table_joint" type="fixed"><parent link="table"/>'
+                       '<child link="base_link"/></joint>', ['[table]', 'one root link']),
+    'not a frame name': (ONE_ROBOT % '' + '<link name="my cell"/><joint name="cell_joint" type="fixed">'
+                         '<parent link="my cell"/><child link="base_link"/></joint>', ['my cell', 'TF frame name']),
+}
+
+
+@pytest.mark.parametrize('fault', sorted(TREE_FAULTS))
+def test_cell_that_is_not_one_urdf_tree(fault, tmp_path):
+    body, words = TREE_FAULTS[fault]
+    cell = tmp_path / 'cell.xacro'
+    cell.write_text(CELL % body)
+    assert_one_line_error(run_expand(str(cell)), *words)
 
 
 def _dump_params(*args):

@@ -70,13 +70,12 @@ def test_arm_is_the_ur_type_from_its_own_parameter_files(configured_model, confi
     folder = os.path.join(UR_CONFIG_ROOT, config['ur_type'])
     with open(os.path.join(folder, 'default_kinematics.yaml')) as f:
         kin = yaml.safe_load(f)['kinematics']
-    assert model.joints['shoulder_pan_joint'].origin[2, 3] == pytest.approx(kin['shoulder']['z'])
-    assert model.joints['elbow_joint'].origin[0, 3] == pytest.approx(kin['forearm']['x'])
-    assert model.joints['wrist_1_joint'].origin[0, 3] == pytest.approx(kin['wrist_1']['x'])
+    assert model.origin_xyz('shoulder_pan_joint')[2] == pytest.approx(kin['shoulder']['z'])
+    assert model.origin_xyz('elbow_joint')[0] == pytest.approx(kin['forearm']['x'])
+    assert model.origin_xyz('wrist_1_joint')[0] == pytest.approx(kin['wrist_1']['x'])
     with open(os.path.join(folder, 'visual_parameters.yaml')) as f:
         base_mesh = yaml.safe_load(f)['mesh_files']['base']['visual']['mesh']
-    mesh = model.link_elements['base_link_inertia'].getElementsByTagName('mesh')[0]
-    assert mesh.getAttribute('filename') == base_mesh  # (the ur16e reuses the ur10e's meshes)
+    assert model.meshes('base_link_inertia')[0].filename == base_mesh  # (the ur16e reuses the ur10e's meshes)
 
 
 def test_tcp_sits_between_the_closed_pads_on_the_flange_axis(configured_model, config):
@@ -93,7 +92,7 @@ def test_tcp_sits_between_the_closed_pads_on_the_flange_axis(configured_model, c
     # The gripper (and so the TCP's x) is turned the same way with or without the sensor.
     np.testing.assert_allclose(pose[:3, 0], [-1, 0, 0], atol=1e-6)
     # And it is where the closed pads meet, by this model's own forward kinematics.
-    closed = {'finger_joint': model.joints['finger_joint'].upper}
+    closed = {'finger_joint': model.limits('finger_joint')[1]}
     pads = [model.transform('gripper_tcp', pad, closed)[:3, 3]
             for pad in ('left_inner_finger_pad', 'right_inner_finger_pad')]
     np.testing.assert_allclose((pads[0] + pads[1]) / 2, 0.0, atol=1e-6)

@@ -6,9 +6,8 @@ import textwrap
 import numpy as np
 import pytest
 
-from conftest import UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, run_expand
-from test_bad_input import assert_one_line_error
-from ur3_ft_gripper_description import description
+from conftest import UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, assert_one_line_error, run_expand
+from ur3_ft_gripper_description import description, kinematics
 
 PARAMETER_FILES = ('joint_limits.yaml', 'default_kinematics.yaml', 'physical_parameters.yaml',
                    'visual_parameters.yaml')
@@ -48,8 +47,8 @@ def test_toggle_that_is_not_a_boolean(arg):
 def test_explicit_parameter_file_wins_over_the_ur_type_default(expand_model):
     ur3_kinematics = os.path.join(UR_CONFIG, 'default_kinematics.yaml')
     model = expand_model(ur_type='ur5e', kinematics_params=ur3_kinematics)
-    assert model.joints['shoulder_pan_joint'].origin[2, 3] == pytest.approx(0.1519)  # UR3's
-    assert expand_model(ur_type='ur5e').joints['shoulder_pan_joint'].origin[2, 3] == pytest.approx(0.1625)
+    assert model.origin_xyz('shoulder_pan_joint')[2] == pytest.approx(0.1519)  # UR3's
+    assert expand_model(ur_type='ur5e').origin_xyz('shoulder_pan_joint')[2] == pytest.approx(0.1625)
 
 
 @pytest.mark.parametrize('prefix', ['', 'r1_'])
@@ -58,7 +57,7 @@ def test_world_roots_the_model_at_world(expand_model, prefix, tmp_path):
     assert model.root() == 'world'
     joint = model.assert_joint_between('world', prefix + 'base_link', 'fixed')
     assert joint.name == prefix + 'world_joint'
-    np.testing.assert_allclose(joint.origin, np.eye(4))
+    np.testing.assert_allclose(kinematics.pose_matrix(joint.origin), np.eye(4))
     urdf = tmp_path / 'world.urdf'
     urdf.write_text(model.text)
     run = subprocess.run(['check_urdf', str(urdf)], stdout=subprocess.PIPE, universal_newlines=True)
@@ -81,10 +80,11 @@ def test_coupling_is_13_9_mm_and_keeps_the_gripper_turned_as_on_the_sensor(confi
     sensor = on_sensor.transform('tool0', 'robotiq_arg2f_base_link')
     np.testing.assert_allclose(coupling[:3, 3], [0, 0, 0.0139], atol=1e-9)
     np.testing.assert_allclose(coupling[:3, :3], sensor[:3, :3], atol=1e-9)
-    mesh = bare.link_elements['robotiq_arg2f_coupling'].getElementsByTagName('mesh')[0]
-    assert mesh.getAttribute('filename') == \
+    mesh = bare.meshes('robotiq_arg2f_coupling')[0]
+    assert mesh.filename == \
         'package://robotiq_2f_140_gripper_visualization/meshes/visual/robotiq_arg2f_coupling.stl'
-    assert mesh.getAttribute('scale') == '0.001 0.001 0.001'  # the STL is in mm
+    assert mesh.scale == [0.001, 0.001, 0.001]  # the STL is in mm
+    bare.assert_mesh_resolves(mesh)
 
 
 def test_both_parts_off_is_the_bare_ur_arm(configured_model):

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from conftest import PACKAGE_DIR
-from ur3_ft_gripper_description import gripper_model, kinematics, wrench_model
+from ur3_ft_gripper_description import gripper_joint_states, gripper_model, kinematics, wrench_model
 from ur3_ft_gripper_description.wrench_model import STANDARD_GRAVITY as G
 
 PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'sim_devices.yaml')
@@ -25,9 +25,12 @@ def test_payload_file_holds_the_gripper_only():
 
 
 def test_gripper_spec_file():
-    spec = gripper_model.load_gripper_spec(PAYLOAD_YAML)
+    spec = gripper_model.load_gripper_spec(PAYLOAD_YAML, ('stroke', 'min_speed', 'max_speed'))
     assert spec['stroke'] == pytest.approx(0.140)
     assert 0 < spec['min_speed'] < spec['max_speed']
+    assert 0 <= spec['gpo_open'] < spec['gpo_closed'] <= 255
+    with pytest.raises(ValueError, match='no nonsense'):
+        gripper_model.load_gripper_spec(PAYLOAD_YAML, ('stroke', 'nonsense'))
 
 
 def test_held_object_moves_the_centre_of_mass():
@@ -43,19 +46,25 @@ def test_held_object_moves_the_centre_of_mass():
 
 # -- gravity wrench --------------------------------------------------------------
 
-MASS, COM = 0.975, np.array([0.0, 0.0, 0.062])
+MASS, COM = 0.975, (0.0, 0.0, 0.062)
+
+
+def wrench(rotation, mass=MASS, com=COM):
+    """The wrench for a sensor with orientation `rotation` (3x3) in a z-up world."""
+    g = rotation.T.dot([0.0, 0.0, -1.0])
+    values = wrench_model.gravity_wrench(g[0], g[1], g[2], mass, com)
+    return np.array(values[:3]), np.array(values[3:])
 
 
 def test_sensor_pointing_down_is_pulled_along_plus_z():
     # Sensor z along world -z (tool pointing at the floor): rotation of pi about x.
-    down = kinematics.rpy_matrix(np.pi, 0, 0)
-    force, torque = wrench_model.gravity_wrench(down, MASS, COM)
+    force, torque = wrench(kinematics.rpy_matrix(np.pi, 0, 0))
     assert np.allclose(force, [0, 0, MASS * G])
     assert np.allclose(torque, 0.0)  # COM on the line of action
 
 
 def test_sensor_pointing_up_is_pushed_along_minus_z():
-    force, torque = wrench_model.gravity_wrench(np.eye(3), MASS, COM)
+    force, torque = wrench(np.eye(3))
     assert np.allclose(force, [0, 0, -MASS * G])
     assert np.allclose(torque, 0.0)
 
@@ -64,7 +73,7 @@ def test_horizontal_sensor_sees_weight_across_and_a_lever_torque():
     # Sensor z along world +x, sensor x along world +z: world down is sensor -x.
     horizontal = np.column_stack([[0, 0, 1], [0, -1, 0], [1, 0, 0]]).astype(float)
     assert np.linalg.det(horizontal) == pytest.approx(1.0)
-    force, torque = wrench_model.gravity_wrench(horizontal, MASS, COM)
+    force, torque = wrench(horizontal)
     assert np.allclose(force, [-MASS * G, 0, 0])
     # 0.062 m lever along z, weight along -x: torque = z x (-x) = -y.
     assert np.allclose(torque, [0, -0.062 * MASS * G, 0])
@@ -72,9 +81,9 @@ def test_horizontal_sensor_sees_weight_across_and_a_lever_torque():
 
 @pytest.mark.parametrize('rpy', [(0.3, -1.1, 2.0), (2.5, 0.4, -0.7), (-1.2, 1.3, 0.1)])
 def test_any_orientation_magnitude_and_lever(rpy):
-    com = np.array([0.01, -0.02, 0.07])
+    com = (0.01, -0.02, 0.07)
     rotation = kinematics.rpy_matrix(*rpy)
-    force, torque = wrench_model.gravity_wrench(rotation, MASS, com)
+    force, torque = wrench(rotation, com=com)
     assert np.linalg.norm(force) == pytest.approx(MASS * G)
     assert np.allclose(torque, np.cross(com, force))
     assert torque.dot(force) == pytest.approx(0.0, abs=1e-9)
@@ -82,46 +91,16 @@ def test_any_orientation_magnitude_and_lever(rpy):
     assert np.allclose(rotation.dot(force), [0, 0, -MASS * G])
 
 
-def test_gravity_vector_in_sensor_frame_is_accepted():
-    force, _ = wrench_model.gravity_wrench([0, 3.0, 0], 2.0, [0, 0, 0.1], g=10.0)
+def test_gravity_direction_of_any_length():
+    force = wrench_model.gravity_wrench(0, 3.0, 0, 2.0, (0, 0, 0.1), g=10.0)[:3]
     assert np.allclose(force, [0, 20.0, 0])
 
 
 def test_gravity_wrench_rejects_a_zero_direction():
     with pytest.raises(ValueError):
-        wrench_model.gravity_wrench([0, 0, 0], MASS, COM)
-
-
-def test_noise_has_the_datasheet_spread():
-    rng = np.random.default_rng(1)
-    samples = [wrench_model.add_noise((np.zeros(3), np.zeros(3)), 0.1, 0.005, rng)
-               for _ in range(4000)]
-    forces = np.array([f for f, _ in samples])
-    torques = np.array([t for _, t in samples])
-    assert np.std(forces) == pytest.approx(0.1, rel=0.05)
-    assert np.std(torques) == pytest.approx(0.005, rel=0.05)
-
-
-# -- zero offset --------------------------------------------------------------
-
-def test_zero_offset_removes_the_wrench_at_set_time_only():
-    offset = wrench_model.ZeroOffset()
-    first = wrench_model.gravity_wrench(np.eye(3), MASS, COM)
-    assert not offset.is_set
-    assert np.allclose(offset.apply(first)[0], first[0])  # no offset yet: unchanged
-    offset.set(first)
-    assert offset.is_set
-    force, torque = offset.apply(first)
-    assert np.allclose(force, 0.0) and np.allclose(torque, 0.0)
-    # Rotate the tool afterwards: the reading is the change since zeroing.
-    turned = wrench_model.gravity_wrench(kinematics.rpy_matrix(np.pi, 0, 0), MASS, COM)
-    force, _ = offset.apply(turned)
-    assert np.allclose(force, [0, 0, 2 * MASS * G])
-    # The stored offset is a copy, not a view of the caller's arrays.
-    first[0][:] = 99.0
-    assert np.allclose(offset.apply(turned)[0], [0, 0, 2 * MASS * G])
-    offset.clear()
-    assert np.allclose(offset.apply(turned)[0], turned[0])
+        wrench_model.gravity_wrench(0, 0, 0, MASS, COM)
+    with pytest.raises(ValueError):
+        wrench_model.gravity_wrench(float('nan'), 0, 1, MASS, COM)
 
 
 # -- gripper opening <-> finger angle --------------------------------------------
@@ -132,8 +111,7 @@ def gripper(default_model):
 
 
 def test_gripper_joint_range_comes_from_the_model(gripper, default_model):
-    joint = default_model.joints['finger_joint']
-    assert (gripper.lower, gripper.upper) == (joint.lower, joint.upper)
+    assert (gripper.lower, gripper.upper) == default_model.limits('finger_joint')
     assert gripper.lower == pytest.approx(0.0) and gripper.upper == pytest.approx(0.7)
 
 
@@ -175,14 +153,42 @@ def test_endpoints_and_clamping_map_to_joint_limits(gripper):
     assert gripper.opening(2.0) == gripper.opening(0.7)
 
 
-def test_nominal_stroke_scales_onto_the_full_joint_range(gripper):
-    assert gripper.command_to_angle(0.140) == pytest.approx(0.0, abs=1e-9)
-    assert gripper.command_to_angle(0.0) == pytest.approx(0.7, abs=1e-9)
-    assert gripper.command_to_angle(0.5) == 0.0  # beyond the stroke: clamped
-    for c in (0.0, 0.01, 0.07, 0.1285, 0.133, 0.14):
-        assert gripper.angle_to_command(gripper.command_to_angle(c)) == pytest.approx(c, abs=1e-6)
-    commands = np.linspace(0, 0.14, 15)
-    assert np.all(np.diff([gripper.command_to_angle(c) for c in commands]) < 0)
+# -- position register <-> opening --------------------------------------------------
+
+def test_register_scale_spans_the_stroke_between_the_units_ends():
+    scale = gripper_model.RegisterScale(0.140, 3, 230)
+    assert scale.opening(3) == pytest.approx(0.140)
+    assert scale.opening(230) == pytest.approx(0.0)
+    assert scale.opening(116.5) == pytest.approx(0.070)
+    assert scale.opening(0) == 0.140 and scale.opening(255) == 0.0  # beyond the ends: clamped
+    for width in (0.0, 0.01, 0.07, 0.1285, 0.14):
+        assert scale.opening(scale.position(width)) == pytest.approx(width, abs=1e-12)
+    assert 1.0 / scale.counts_per_metre == pytest.approx(0.140 / 227)
+
+
+@pytest.mark.parametrize('args', [(0.0, 3, 230), (0.14, 230, 3), (0.14, -1, 230), (0.14, 3, 256)])
+def test_register_scale_rejects_impossible_calibrations(args):
+    with pytest.raises(ValueError):
+        gripper_model.RegisterScale(*args)
+
+
+def test_every_register_value_maps_to_the_pad_gap_it_stands_for(default_model):
+    fingers = gripper_model.GripperKinematics(default_model.text,
+                                              samples=gripper_joint_states.ANGLE_TABLE_SAMPLES)
+    scale = gripper_model.RegisterScale(0.140, 3, 230)
+    table = gripper_joint_states.JointTable(fingers, scale)
+    assert table.joint_name == 'finger_joint'
+    assert table.angle(0) == table.angle(3) == pytest.approx(0.0)     # open (wider than the model)
+    # Closed: the pads touch (the model's limit, 0.7 rad, overlaps them by 0.2 mm).
+    assert fingers.opening(table.angle(230)) == pytest.approx(0.0, abs=1e-6)
+    assert table.angle(230) == pytest.approx(0.7, abs=0.002) and table.angle(255) == table.angle(230)
+    for gpo in range(3, 231):
+        width = scale.opening(gpo)
+        expected = min(width, fingers.max_opening)
+        if width > fingers.min_opening:
+            assert fingers.opening(table.angle(gpo)) == pytest.approx(expected, abs=1e-6), gpo
+    angles = [table.angle(gpo) for gpo in range(256)]
+    assert all(b >= a for a, b in zip(angles, angles[1:]))  # closing never opens
 
 
 def test_prefixed_model(expand_model):

@@ -3,9 +3,9 @@ import math
 
 import numpy as np
 import pytest
+from transforms3d.quaternions import quat2mat
 
-from ur3_ft_gripper_description import ft300_sim, gripper_model, gripper_sim, kinematics, sim_params, wrench_model
-from ur3_ft_gripper_description.wrench_model import STANDARD_GRAVITY as G
+from ur3_ft_gripper_description import ft300_sim, gripper_joint_states, gripper_sim, sim_params
 
 
 def params(**values):
@@ -88,23 +88,46 @@ def noise_free(**values):
     return ft300_sim.FT300Settings.from_params(params(noise_force=0, noise_torque=0, **values))
 
 
-TOOL_DOWN = kinematics.rpy_matrix(math.pi, 0, 0)
+DOWN, UP = (0.0, 0.0, 1.0), (0.0, 0.0, -1.0)  # gravity in the sensor frame: tool down, tool up
 
 
-def test_reading_is_the_gripper_weight():
+def on_grid(values):
+    """The values are whole counts of 0.01 N / 0.001 Nm, as float32 carries them."""
+    for v, r in zip(values, (0.01,) * 3 + (0.001,) * 3):
+        assert abs(v / r - round(v / r)) < 1e-3, values
+        assert v == float(np.float32(v))
+
+
+def test_reading_is_the_gripper_weight_in_the_devices_resolution():
     sensor = ft300_sim.SensorModel(noise_free())
-    force, torque = sensor.read(TOOL_DOWN)
-    assert force == pytest.approx([0, 0, 0.975 * G])
-    assert torque == pytest.approx([0, 0, 0], abs=1e-12)
+    reading = sensor.read_gravity(*DOWN)
+    assert reading == pytest.approx((0, 0, 9.56, 0, 0, 0), abs=1e-6)  # 0.975 kg * g = 9.5615 N
+    on_grid(reading)
 
 
-def test_zero_needs_a_pose_then_takes_the_noise_free_reading():
+def test_quaternion_reading_equals_the_rotation_matrix_one():
+    settings = noise_free(payload_mass=0.4, payload_com=[0.01, -0.02, 0.15])
+    sensor = ft300_sim.SensorModel(settings)
+    rng = np.random.default_rng(3)
+    for q in rng.normal(size=(50, 4)):
+        x, y, z, w = q / np.linalg.norm(q)
+        g = quat2mat((w, x, y, z)).T.dot([0, 0, -1])
+        got = sensor.read_quaternion(x, y, z, w)
+        assert got == sensor.read_gravity(*g)
+        on_grid(got)
+
+
+def test_device_resolution_and_range():
+    assert ft300_sim.as_device_sends((1.234, -0.005, 400.0, 0.0123, -0.0004, -50.0)) == pytest.approx(
+        (1.23, 0.0, 327.67, 0.012, 0.0, -32.768), rel=1e-6, abs=1e-6)  # 16-bit counts saturate
+
+
+def test_zero_takes_the_reading_before_it_then_readings_are_relative():
     sensor = ft300_sim.SensorModel(ft300_sim.FT300Settings.from_params(params()),
                                    rng=np.random.default_rng(1))
-    assert not sensor.set_zero()
-    sensor.read(TOOL_DOWN)
-    assert sensor.set_zero()
-    samples = np.array([np.concatenate(sensor.read(TOOL_DOWN)) for _ in range(2000)])
+    sensor.read_gravity(*DOWN)
+    sensor.request_zero()
+    samples = np.array([sensor.read_gravity(*DOWN) for _ in range(2000)])
     # Zero-mean noise of the datasheet spread around zero, not around the weight.
     assert np.allclose(samples[:, :3].mean(axis=0), 0, atol=0.01)
     assert np.allclose(samples[:, :3].std(axis=0), 0.1, rtol=0.1)
@@ -113,26 +136,81 @@ def test_zero_needs_a_pose_then_takes_the_noise_free_reading():
 
 def test_after_zero_a_new_pose_reads_the_difference():
     sensor = ft300_sim.SensorModel(noise_free())
-    sensor.read(TOOL_DOWN)
-    sensor.set_zero()
-    force, _ = sensor.read(np.eye(3))  # tool pointing up: weight along -z
-    assert force == pytest.approx([0, 0, -2 * 0.975 * G])
+    sensor.read_gravity(*DOWN)
+    sensor.request_zero()
+    assert sensor.read_gravity(*DOWN) == pytest.approx((0,) * 6, abs=1e-6)
+    assert sensor.read_gravity(*UP)[2] == pytest.approx(-2 * 9.5615, abs=0.006)
 
 
-def test_fast_reading_equals_the_reference_model_for_any_orientation():
-    # The node's float arithmetic against wrench_model's numpy reference, for
-    # rotation matrices and the quaternions that tf2 hands the node.
-    settings = ft300_sim.FT300Settings.from_params(
-        params(noise_force=0, noise_torque=0, payload_mass=0.4, payload_com=[0.01, -0.02, 0.15]))
-    sensor = ft300_sim.SensorModel(settings)
-    rng = np.random.default_rng(3)
-    for q in rng.normal(size=(50, 4)):
-        x, y, z, w = q / np.linalg.norm(q)
-        rotation = kinematics.quaternion_matrix(x, y, z, w)
-        force, torque = wrench_model.gravity_wrench(rotation, settings.payload.mass, settings.payload.com)
-        for got in (sensor.read(rotation), sensor.read_quaternion(x, y, z, w)):
-            assert got[0] == pytest.approx(force, abs=1e-12)
-            assert got[1] == pytest.approx(torque, abs=1e-12)
+def test_zero_before_any_reading_zeroes_the_first():
+    sensor = ft300_sim.SensorModel(noise_free())
+    sensor.request_zero()
+    assert sensor.read_gravity(*DOWN) == pytest.approx((0,) * 6, abs=1e-6)
+
+
+# -- robotiq_ft_sensor_acc, as rq_sensor answers -------------------------------------
+
+IDENTITY = dict(serial_number='SIM-0000', firmware_version='SIM-0.0.0', production_year='2026')
+
+
+class AccLog(object):
+    """The loggers accessor_reply takes, recording what they were given."""
+
+    def __init__(self):
+        self.infos, self.warnings = [], []
+
+    def info(self, text):
+        self.infos.append(text)
+
+    def warn(self, text):
+        self.warnings.append(text)
+
+    def warn_once(self, text):
+        if text not in self.warnings:
+            self.warnings.append(text)
+
+
+class ZeroCounter(object):
+    def __init__(self):
+        self.zeroes = 0
+
+    def request_zero(self):
+        self.zeroes += 1
+
+
+def acc(command_id=0, command=''):
+    """(reply, zero requests, info lines, warnings) of one robotiq_ft_sensor_acc request."""
+    sensor, log = ZeroCounter(), AccLog()
+    reply = ft300_sim.accessor_reply(command_id, command, sensor, IDENTITY, log)
+    return reply, sensor.zeroes, log.infos, log.warnings
+
+
+@pytest.mark.parametrize('command_id, res', [(1, 'SIM-0000'), (2, 'SIM-0.0.0'), (4, '2026')])
+def test_acc_ids_answer_the_identity(command_id, res):
+    assert acc(command_id)[:2] == ((True, res), 0)
+
+
+def test_acc_set_zero():
+    (reply, zeroes, _, warnings) = acc(8)
+    assert reply == (True, 'Done') and zeroes == 1 and warnings == []
+
+
+@pytest.mark.parametrize('command_id', [0, 3, 5, 7, 9, 16, 255])
+def test_acc_unknown_id_fails_with_the_drivers_answer_and_warning(command_id):
+    reply, zeroes, _, warnings = acc(command_id)
+    assert reply == (False, 'Unsupported command_id') and zeroes == 0
+    assert warnings == ["Unsupported command_id '%d', should be in [1, 2, 4, 8]" % command_id]
+
+
+@pytest.mark.parametrize('command, res, zeroes', [
+    ('GET SNU', 'SIM-0000', 0), ('GET FWV', 'SIM-0.0.0', 0), ('GET PYE', '2026', 0),
+    ('SET ZRO', 'Done', 1),
+    ('GET XYZ', '', 0), ('SET SNU', '', 0), ('PUT ZRO', '', 0), ('SET ZERO', '', 0), ('ZRO', '', 0)])
+def test_acc_legacy_strings_answer_as_rq_sensor_and_never_report_success(command, res, zeroes):
+    reply, got_zeroes, info, warnings = acc(8, command)  # the string wins over the id
+    assert reply == (False, res) and got_zeroes == zeroes
+    assert info == ['I heard: [%s]' % command, 'I send: [%s]' % res]
+    assert warnings == ['Usage of command-string is deprecated, please use the numeric command_id']
 
 
 # -- pose watch ----------------------------------------------------------------------
@@ -175,133 +253,198 @@ def test_lost_tf_after_publishing_warns_once():
     assert len(warn.lines) == 1 and 'lost TF' in warn.lines[0]
 
 
-# -- gripper_sim ------------------------------------------------------------------------
+# -- gripper_sim: the register interface -------------------------------------------------
 
-def test_gripper_defaults_are_the_real_devices():
-    settings = gripper_sim.settings_from_params(params())
-    assert settings['stroke'] == pytest.approx(0.140)
-    assert settings['speed'] == pytest.approx(0.250)
-    assert settings['rate'] == pytest.approx(50.0)
-    assert settings['initial_opening'] == pytest.approx(0.140)
-    assert settings['notes'] == []
+SPEC = gripper_sim.spec_from_params(params())
+ACTIVATION = SPEC.activation_time
 
 
-def test_gripper_speed_outside_the_device_range_is_allowed_with_a_note():
-    settings = gripper_sim.settings_from_params(params(speed=1.0))
-    assert settings['speed'] == 1.0 and '0.03..0.25' in settings['notes'][0]
+def command(**registers):
+    values = dict.fromkeys(gripper_sim.COMMAND_FIELDS, 0)
+    values.update(registers)
+    return values
+
+
+class Clock(object):
+    def __init__(self):
+        self.now = 100.0
+
+    def __call__(self):
+        return self.now
+
+
+def gripper(**kwargs):
+    warn, clock = Log(), Clock()
+    return gripper_sim.RegisterGripper(SPEC, warn, clock=clock, **kwargs), warn, clock
+
+
+def run_for(g, seconds, dt=0.02):
+    for _ in range(int(round(seconds / dt))):
+        g.advance(dt)
+    return g.status()
+
+
+def active(**kwargs):
+    g, warn, clock = gripper(**kwargs)
+    g.set_command(command(rACT=1))
+    run_for(g, ACTIVATION + 0.1)
+    return g, warn, clock
+
+
+def test_gripper_defaults_come_from_the_devices_file():
+    spec, rate, width, initial = gripper_sim.settings_from_params(params())
+    assert (spec.stroke, spec.gpo_open, spec.gpo_closed) == (0.140, 3, 230)
+    assert rate == 50.0 and width is None and initial == 3
+    assert spec.speed_counts(255) == pytest.approx(0.250 * 227 / 0.140)
+    assert spec.speed_counts(0) == pytest.approx(0.030 * 227 / 0.140)
 
 
 @pytest.mark.parametrize('values, named', [
-    (dict(speed=0), '~speed'), (dict(rate=-1), '~rate'),
-    (dict(initial_opening=0.2), '~initial_opening'), (dict(initial_opening=-0.1), '~initial_opening'),
-])
+    (dict(rate=-1), '~rate'), (dict(object_width=-0.01), '~object_width'),
+    (dict(object_width=0.2), '~object_width'), (dict(object_width='wide'), '~object_width'),
+    (dict(initial_position=300), '~initial_position'),
+    (dict(devices_file='/nonexistent.yaml'), '~devices_file')])
 def test_gripper_bad_parameter_is_one_line_naming_it(values, named):
     with pytest.raises(sim_params.ParamError) as error:
         gripper_sim.settings_from_params(params(**values))
-    assert str(error.value).startswith(named)
+    assert str(error.value).startswith(named) and '\n' not in str(error.value)
 
 
-@pytest.mark.parametrize('value, kind', [
-    (float('nan'), 'nan'), (float('inf'), 'inf'), (-float('inf'), 'inf'),
-    (-0.001, 'below'), (0.1401, 'above'), (1e9, 'above')])
-def test_bad_commands_are_named(value, kind):
-    assert gripper_sim.command_problem(value, 0.140)[0] == kind
+def test_gripper_devices_file_without_a_register_figure_is_rejected(tmp_path):
+    bad = tmp_path / 'devices.yaml'
+    bad.write_text('gripper: {stroke: 0.14, min_speed: 0.03, max_speed: 0.25}\n')
+    with pytest.raises(sim_params.ParamError, match='gpo_open'):
+        gripper_sim.settings_from_params(params(devices_file=str(bad)))
 
 
-@pytest.mark.parametrize('value', [0.0, 0.07, 0.140])
-def test_commands_in_the_stroke_are_valid(value):
-    assert gripper_sim.command_problem(value, 0.140) is None
+def test_power_up_is_reset_and_motion_requests_need_the_activation_bit():
+    g, _, _ = gripper()
+    assert g.status() == dict(gACT=0, gGTO=0, gSTA=0, gOBJ=0, gFLT=0, gPR=0, gPO=3, gCU=0)
+    g.set_command(command(rGTO=1, rPR=200, rSP=255))
+    status = run_for(g, 0.5)
+    assert status['gFLT'] == 0x07 and status['gPO'] == 3 and status['gSTA'] == 0
 
 
-def test_bad_commands_are_ignored_and_warned_once_per_kind():
-    warn, clock = Log(), [100.0]
-    state = gripper_sim.GripperState(0.140, 0.25, 0.140, warn, clock=lambda: clock[0])
-    assert state.command(0.05)
-    for value in [float('nan'), 0.5, float('nan'), 0.6, -1.0, float('inf')] * 100:
-        assert not state.command(value)
-    assert state.target == 0.05
-    assert len(warn.lines) == 4  # nan, above, below, inf
-    assert all('between 0.0 (closed) and 0.14 (open)' in line for line in warn.lines)
-    clock[0] += gripper_sim.REWARN_AFTER
-    assert state.command(0.06)  # a valid command re-arms the warnings
-    state.command(0.5)
-    assert len(warn.lines) == 5 and state.target == 0.06
+def test_activation_takes_gsta_0_1_3_and_delays_a_motion_request():
+    g, _, _ = gripper()
+    g.set_command(command(rACT=1, rGTO=1, rPR=100, rSP=255, rFR=150))  # SimpleController's 'a' + a position
+    g.advance(0.02)
+    status = g.status()
+    assert (status['gACT'], status['gSTA'], status['gGTO'], status['gFLT']) == (1, 1, 0, 0x05)
+    status = run_for(g, ACTIVATION - 0.1)
+    assert status['gSTA'] == 1 and status['gPO'] == 3  # no motion while activating
+    status = run_for(g, 0.2)
+    assert status['gSTA'] == 3 and status['gFLT'] == 0 and status['gGTO'] == 1
+    assert status['gOBJ'] == 0 and status['gCU'] > 0  # the delayed request runs now
+    status = run_for(g, 1.0)
+    assert (status['gPO'], status['gOBJ'], status['gPR'], status['gCU']) == (100, 3, 100, 0)
 
 
-def test_bad_commands_alternating_with_good_ones_warn_once_per_kind_and_second():
-    warn, clock = Log(), [100.0]
-    state = gripper_sim.GripperState(0.140, 0.25, 0.140, warn, clock=lambda: clock[0])
-    for i in range(3000):  # 3 s of 1000 commands per second, every other one bad
-        clock[0] += 0.001
-        assert state.command(float('nan') if i % 2 else 0.001 * (i % 140)) != bool(i % 2)
-    assert len(warn.lines) == 3  # at 100.001, 101.001 (+/- a step), 102.00x
-    assert state.target == pytest.approx(0.001 * (2998 % 140))
+def test_motion_speed_follows_rsp_and_positions_beyond_the_ends_stop_there():
+    g, _, _ = active()
+    g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255))
+    assert run_for(g, 0.28)['gPO'] == pytest.approx(3 + 0.28 * 0.250 * 227 / 0.140, abs=1)
+    status = run_for(g, 1.0)
+    assert (status['gPO'], status['gOBJ'], status['gPR']) == (230, 3, 255)
+    g.set_command(command(rACT=1, rGTO=1, rPR=0, rSP=0))  # slowest: 30 mm/s
+    assert run_for(g, 1.0)['gPO'] == pytest.approx(230 - 0.030 * 227 / 0.140, abs=1)
+    assert run_for(g, 5.0)['gPO'] == 3
 
 
-def test_gripper_moves_at_its_speed_and_stops_on_target():
-    state = gripper_sim.GripperState(0.140, 0.25, 0.140, Log())
-    state.command(0.0)
-    positions = [state.advance(0.02) for _ in range(40)]
-    assert positions[0] == pytest.approx(0.140 - 0.005)
-    assert np.allclose(np.diff(positions[:20]), -0.005)
-    assert positions[-1] == 0.0 and min(positions) == 0.0  # 0.56 s for the stroke, no overshoot
+def test_rgto_0_stops_the_fingers_where_they_are():
+    g, _, _ = active()
+    g.set_command(command(rACT=1, rGTO=1, rPR=230, rSP=255))
+    moving = run_for(g, 0.2)
+    assert moving['gOBJ'] == 0 and 3 < moving['gPO'] < 230
+    g.set_command(command(rACT=1, rGTO=0, rPR=230, rSP=255))
+    stopped = run_for(g, 0.5)
+    assert stopped['gPO'] == pytest.approx(moving['gPO'], abs=2) and stopped['gGTO'] == 0
+    # The manual: ignore gOBJ while gGTO is 0; 3 lets a client waiting for a stop see one.
+    assert stopped['gCU'] == 0 and stopped['gOBJ'] == 3
+    g.set_command(command(rACT=1, rGTO=1, rPR=230, rSP=255))  # go on
+    assert run_for(g, 1.0)['gPO'] == 230
 
 
-def test_table_angle_matches_the_exact_inverse(default_model):
-    fingers = gripper_model.GripperKinematics(default_model.text, samples=gripper_sim.ANGLE_TABLE_SAMPLES)
-    for command in np.linspace(0.0, 0.140, 57):
-        opening = fingers.command_to_opening(command)
-        assert fingers.table_angle(opening) == pytest.approx(fingers.angle(opening), abs=1e-6)
+def test_closing_on_the_object_stops_at_its_width_with_gobj_2():
+    g, _, _ = active(object_width=0.070)
+    g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=255))
+    status = run_for(g, 1.0)
+    assert status['gOBJ'] == 2 and status['gPO'] == round(SPEC.scale.position(0.070))
+    assert status['gCU'] == 80  # holding at full force
+    g.set_command(command(rACT=1, rGTO=1, rPR=250, rSP=255, rFR=100))  # squeeze on: still held
+    status = run_for(g, 0.5)
+    assert status['gOBJ'] == 2 and status['gPO'] == round(SPEC.scale.position(0.070))
+    g.set_command(command(rACT=1, rGTO=1, rPR=0, rSP=255))  # open: let go
+    assert run_for(g, 0.1)['gOBJ'] == 0
+    assert run_for(g, 1.0)['gOBJ'] == 3
+    g.set_command(command(rACT=1, rGTO=1, rPR=50, rSP=255))  # wider than the object: no contact
+    assert run_for(g, 1.0)['gOBJ'] == 3
 
 
-# -- master watch ------------------------------------------------------------------
-
-class FakeMaster(object):
-    """rosgraph.Master's lookupNode as a restarted or unreachable master answers it."""
-    master_uri = 'http://localhost:11311'
-
-    def __init__(self):
-        self.answer = 'http://node:1/'
-
-    def lookupNode(self, name):
-        import rosgraph
-        if isinstance(self.answer, Exception):
-            raise self.answer
-        if self.answer is None:
-            raise rosgraph.MasterError('unknown node [%s]' % name)
-        return self.answer
-
-
-def master_watch_with(register_all):
-    from ur3_ft_gripper_description import master_watch
-    master, warn, info, fatal, shutdowns = FakeMaster(), Log(), Log(), Log(), []
-    watch = master_watch.MasterWatch('/gripper_sim', master, register_all, warn, info, fatal,
-                                     shutdowns.append)
-    return watch, master, warn, info, fatal, shutdowns
+def test_auto_release_overrides_opens_slowly_and_needs_a_reset():
+    g, _, _ = active(object_width=0.070)
+    g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255))
+    run_for(g, 1.0)
+    g.set_command(command(rACT=1, rATR=1))
+    status = run_for(g, 0.5)
+    assert (status['gFLT'], status['gSTA'], status['gGTO']) == (0x0B, 0, 0)
+    assert status['gPO'] == pytest.approx(SPEC.scale.position(0.070) - 0.5 * 0.030 * 227 / 0.140, abs=1)
+    g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255))  # ignored while releasing
+    status = run_for(g, 10.0)
+    assert (status['gFLT'], status['gPO'], status['gSTA']) == (0x0F, 0, 0)  # at the mechanical end
+    g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255))
+    assert run_for(g, 2.0)['gPO'] == 0  # no motion until reset and activated again
+    g.set_command(command(rACT=0))
+    assert g.status()['gFLT'] == 0 and g.status()['gACT'] == 0
+    g.set_command(command(rACT=1, rGTO=1, rPR=100, rSP=255))
+    assert run_for(g, ACTIVATION + 1.0)['gPO'] == 100
 
 
-def test_master_outage_warns_once_and_a_restart_reregisters_once():
-    calls = []
-    watch, master, warn, info, fatal, _ = master_watch_with(lambda: calls.append(1) or 7)
-    assert watch.check('http://node:1/') == 'ok' and not calls
-    master.answer = ConnectionRefusedError(111, 'Connection refused')
-    for _ in range(5):
-        assert watch.check('http://node:1/') == 'unreachable'
-    assert len(warn.lines) == 1 and 'unreachable' in warn.lines[0]
-    master.answer = None  # a new master: it does not know the node
-    assert watch.check('http://node:1/') == 'ok'
-    master.answer = 'http://node:1/'
-    assert watch.check('http://node:1/') == 'ok'
-    assert calls == [1] and len(info.lines) == 1 and 'registered' in info.lines[0]
-    assert fatal.lines == [] and watch.exit_status == 0
+def test_reset_during_motion_stops_and_clears():
+    g, _, _ = active()
+    g.set_command(command(rACT=1, rGTO=1, rPR=230, rSP=255))
+    run_for(g, 0.2)
+    g.set_command(command(rACT=0, rGTO=1, rPR=230, rSP=255))
+    status = run_for(g, 0.5)
+    assert (status['gACT'], status['gSTA'], status['gGTO'], status['gOBJ']) == (0, 0, 0, 0)
+    assert status['gFLT'] == 0x07  # rGTO without the activation bit
 
 
-def test_failed_reregistration_exits_with_one_line():
-    def fail():
-        raise OSError('connection reset')
-    watch, master, _, _, fatal, shutdowns = master_watch_with(fail)
-    master.answer = None
-    assert watch.check('http://node:1/') == 'failed'
-    assert watch.check('http://node:1/') == 'failed'
-    assert len(fatal.lines) == 1 and 'start the node again' in fatal.lines[0]
-    assert len(shutdowns) == 1 and watch.exit_status == 1
+def test_nonsense_bits_are_taken_as_1_like_the_driver_with_one_warning_per_register_and_period():
+    g, warn, clock = gripper()
+    for _ in range(100):
+        g.set_command(command(rACT=7, rGTO=200, rATR=0, rPR=80, rSP=255))
+    assert g.command['rACT'] == 1 and g.command['rGTO'] == 1
+    assert len(warn.lines) == 2 and 'rACT=7' in warn.lines[0] and 'rGTO=200' in warn.lines[1]
+    status = run_for(g, ACTIVATION + 1.0)
+    assert status['gSTA'] == 3 and status['gPO'] == 80
+    clock.now += gripper_sim.RATE_LIMIT
+    g.set_command(command(rACT=2, rGTO=1, rPR=80))
+    assert len(warn.lines) == 3
+
+
+def test_any_register_values_never_raise():
+    g, _, _ = gripper(object_width=0.05)
+    rng = np.random.default_rng(5)
+    for values in rng.integers(0, 256, size=(3000, 6)):
+        g.set_command(dict(zip(gripper_sim.COMMAND_FIELDS, values.tolist())))
+        g.advance(float(rng.uniform(0, 0.1)))
+        status = g.status()
+        assert all(0 <= status[k] <= 255 for k in gripper_sim.STATUS_FIELDS), status
+
+
+# -- gripper_joint_states parameters --------------------------------------------------------
+
+def test_joint_states_calibration_defaults_and_override():
+    scale = gripper_joint_states.scale_from_params(params())
+    assert (scale.gpo_open, scale.gpo_closed, scale.stroke) == (3, 230, 0.140)
+    scale = gripper_joint_states.scale_from_params(params(gpo_open=6, gpo_closed=227))
+    assert scale.opening(6) == 0.140 and scale.opening(227) == 0.0
+
+
+@pytest.mark.parametrize('values', [dict(gpo_open=230, gpo_closed=3), dict(gpo_closed=300),
+                                    dict(gpo_open='a'), dict(gpo_open=-1)])
+def test_joint_states_bad_calibration_is_one_line(values):
+    with pytest.raises(sim_params.ParamError) as error:
+        gripper_joint_states.scale_from_params(params(**values))
+    assert str(error.value).startswith('~gpo_') and '\n' not in str(error.value)

@@ -25,13 +25,6 @@ def test_yaml_matches_the_tcp_recomputed_from_the_expanded_model(default_model):
         assert stored[key] == pytest.approx(computed[key], abs=1e-6), (key, robotiq_variant())
 
 
-def test_yaml_records_both_robotiq_layouts():
-    with open(TCP_YAML) as f:
-        text = f.read()
-    assert text.startswith('# GENERATED')
-    assert '#   robotiq-noetic:' in text and '#   robotiq-kinetic:' in text
-
-
 def test_tcp_frame_in_the_model_is_the_computed_one(default_model):
     np.testing.assert_allclose(default_model.transform('robotiq_arg2f_base_link', 'gripper_tcp'),
                                tcp.tcp_matrix(default_model), atol=1e-6)

@@ -112,7 +112,7 @@ def test_a_slider_moved_with_the_keyboard_moves_the_arm_in_joint_states_and_tf(t
         buffer = tf2_ros.Buffer()
         tf2_ros.TransformListener(buffer)
         model = kinematics.Model(rospy.get_param('robot_description'))
-        upper = model.joints[JOINT].upper
+        upper = model.joints[JOINT].limit.upper
 
         def tf(link):
             msg = buffer.lookup_transform('base_link', link, rospy.Time(0), rospy.Duration(TIMEOUT))

@@ -1,0 +1,101 @@
+"""finger_joint from a 2F-140's status registers, for the real gripper and the simulated one.
+
+Robotiq's drivers publish no joint states, so a model's fingers never move.
+This node subscribes ``Robotiq2FGripperRobotInput`` (from
+Robotiq2FGripperRtuNode.py / TcpNode.py or from gripper_sim) and publishes
+``gripper/joint_states`` (sensor_msgs/JointState with the one joint
+``<prefix>finger_joint``) for joint_state_publisher's ``source_list``; the
+mimic joints follow it there.
+
+gPO -> opening -> angle:
+  * opening: gripper_model.RegisterScale, linear between ~gpo_open (the full
+    0.140 m stroke) and ~gpo_closed (0 m); these differ per unit: measure
+    yours (config/sim_devices.yaml says how and gives the defaults);
+  * angle: the model's own finger kinematics (gripper_model.GripperKinematics,
+    from ``robot_description``), so the pads in TF are that far apart. The
+    model's pads open only ~0.1285 m: any wider opening shows as 0 rad.
+
+Private parameters:
+  ~prefix        ''  ; the model's joint prefix
+  ~gpo_open      gPO of this unit fully open  (default from ~devices_file)
+  ~gpo_closed    gPO of this unit fully closed (default from ~devices_file)
+  ~devices_file  config/sim_devices.yaml
+"""
+
+from ur3_ft_gripper_description import gripper_model, sim_params
+
+# Samples of the finger angle table: interpolation in it is within 1e-6 rad of
+# the exact inverse (test_sim_models checks it).
+ANGLE_TABLE_SAMPLES = 4001
+
+
+def scale_from_params(get_param):
+    """The unit's RegisterScale from ~gpo_open, ~gpo_closed and ~devices_file; ParamError if bad."""
+    spec = sim_params.from_devices_file(get_param, lambda path: gripper_model.load_gripper_spec(
+        path, ('stroke', 'gpo_open', 'gpo_closed')))
+    gpo_open = sim_params.number(get_param, '~gpo_open', spec['gpo_open'], minimum=0.0)
+    gpo_closed = sim_params.number(get_param, '~gpo_closed', spec['gpo_closed'], minimum=0.0)
+    if not gpo_open < gpo_closed <= 255:
+        raise sim_params.ParamError('~gpo_open=%g, ~gpo_closed=%g: need 0 <= gpo_open < gpo_closed '
+                                    '<= 255 (gPO of this unit fully open, fully closed)'
+                                    % (gpo_open, gpo_closed))
+    return gripper_model.RegisterScale(float(spec['stroke']), gpo_open, gpo_closed)
+
+
+class JointTable(object):
+    """finger_joint angle for each of the 256 values of gPO."""
+
+    def __init__(self, fingers, scale):
+        self.joint_name = fingers.joint_name
+        self.angles = [fingers.table_angle(scale.opening(gpo)) for gpo in range(256)]
+
+    def angle(self, gpo):
+        return self.angles[min(max(int(gpo), 0), 255)]
+
+
+def run(rospy):
+    """The node. Returns the exit status."""
+    from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input
+    from sensor_msgs.msg import JointState
+
+    from ur3_ft_gripper_description import node_loop
+
+    name = rospy.get_name()
+    try:
+        prefix = sim_params.prefix(rospy.get_param)
+        scale = scale_from_params(rospy.get_param)
+    except sim_params.ParamError as exc:
+        rospy.logfatal('%s: bad parameter %s', name, exc)
+        return 1
+    description = node_loop.wait_for_param(rospy, 'robot_description', '%s: waiting for the '
+                                            'robot_description parameter: the finger kinematics '
+                                            'come from the model (load_ur3_ft_gripper.launch)' % name)
+    if description is None:
+        return 0
+    try:
+        fingers = gripper_model.GripperKinematics(description, prefix=prefix,
+                                                  samples=ANGLE_TABLE_SAMPLES)
+    except ValueError as exc:
+        rospy.logfatal('%s: robot_description has no usable 2F-140 (%s); check ~prefix', name, exc)
+        return 1
+    table = JointTable(fingers, scale)
+    publisher = rospy.Publisher('gripper/joint_states', JointState, queue_size=10)
+
+    def on_status(msg):
+        state = JointState()
+        state.header.stamp = rospy.Time.now()
+        state.name = [table.joint_name]
+        state.position = [table.angle(msg.gPO)]
+        publisher.publish(state)
+
+    rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, on_status,
+                     queue_size=10)
+    rospy.loginfo('%s: %s from gPO (%g open .. %g closed) on gripper/joint_states', name,
+                  table.joint_name, scale.gpo_open, scale.gpo_closed)
+    return node_loop.spin(rospy)
+
+
+def main():
+    import rospy
+    rospy.init_node('gripper_joint_states')
+    return run(rospy)

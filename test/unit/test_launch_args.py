@@ -1,0 +1,42 @@
+"""Every argument of the load launch reaches the model from the view launches too."""
+import re
+import subprocess
+
+import pytest
+
+PACKAGE = 'ur3_ft_gripper_description'
+# Each view launch with the arguments it requires.
+VIEW_LAUNCHES = {'view_ur3_ft_gripper.launch': [], 'view_ur_ft_gripper.launch': ['ur_type:=ur3']}
+
+
+def launch_args(launch_file):
+    """The names roslaunch lists for `roslaunch --ros-args` (required and optional)."""
+    run = subprocess.run(['roslaunch', '--ros-args', PACKAGE, launch_file], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, universal_newlines=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    return set(re.findall(r'^  (\w+)(?: \(default|:)', run.stdout, re.MULTILINE))
+
+
+def dumped_description(launch_file, *args):
+    run = subprocess.run(['roslaunch', '--dump-params', PACKAGE, launch_file] + list(args),
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                         timeout=120)
+    assert run.returncode == 0 and run.stdout, run.stderr
+    return run.stdout
+
+
+@pytest.mark.parametrize('view', sorted(VIEW_LAUNCHES))
+def test_view_launch_takes_every_load_argument(view):
+    missing = launch_args('load_ur_ft_gripper.launch') - launch_args(view) - {'ur_type'}
+    assert not missing, 'load arguments the view launch cannot pass on: %s' % sorted(missing)
+
+
+@pytest.mark.parametrize('view', sorted(VIEW_LAUNCHES))
+def test_view_launch_passes_transmission_and_safety_arguments_to_the_model(view):
+    text = dumped_description(view, *VIEW_LAUNCHES[view] + [
+        'safety_limits:=true', 'safety_pos_margin:=0.25', 'safety_k_position:=33',
+        'transmission_hw_interface:=hardware_interface/EffortJointInterface'])
+    assert 'hardware_interface/EffortJointInterface' in text
+    assert 'hardware_interface/PositionJointInterface' not in text
+    assert 'k_position=\\"33\\"' in text
+    assert 'soft_lower_limit=\\"-6.03318530' in text  # -2 pi + the margin 0.25
