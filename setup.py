@@ -3,6 +3,7 @@ from catkin_pkg.python_setup import generate_distutils_setup
 from setuptools import setup
 
 setup(**generate_distutils_setup(
-    packages=['ur3_ft_gripper_description'],
+    packages=['ur3_ft_gripper_description', 'ur3_ft_gripper_description.model',
+              'ur3_ft_gripper_description.devices'],
     package_dir={'': 'src'},
 ))

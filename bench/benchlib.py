@@ -126,8 +126,13 @@ def machine():
         pass
     with open('/proc/meminfo') as f:
         mem = int(f.readline().split()[1]) / 1024.0 / 1024.0
-    distro = platform.freedesktop_os_release().get('PRETTY_NAME', '') if hasattr(
-        platform, 'freedesktop_os_release') else ''
+    distro = ''
+    try:  # platform.freedesktop_os_release needs Python 3.10; Noetic has 3.8
+        with open('/etc/os-release') as f:
+            fields = dict(line.rstrip('\n').split('=', 1) for line in f if '=' in line)
+        distro = fields.get('PRETTY_NAME', '').strip('"')
+    except OSError:
+        pass
     return '%s, %d CPUs, %.1f GB RAM, %s, Linux %s, Python %s' % (
         cpu, os.cpu_count(), mem, distro, platform.release(), platform.python_version())
 

@@ -13,8 +13,6 @@ import argparse
 import os
 import subprocess
 import sys
-import tempfile
-import textwrap
 import threading
 import time
 import xml.dom.minidom
@@ -26,46 +24,14 @@ PACKAGE = 'ur3_ft_gripper_description'
 GOALS = {'expansion': 1.25, 'bringup': 1.15}
 
 
-# -- xacro: the real ROS package, or a shim around the same patched PyPI xacro ------
+# -- xacro: the ROS package, as upstream's load_ur.launch runs it ----------------
 
-SHIM_MANIFEST = '''<?xml version="1.0"?>
-<package format="3">
-  <name>xacro</name><version>0.0.0</version>
-  <description>Benchmark shim: PyPI xacro with $(find) on ROS_PACKAGE_PATH</description>
-  <maintainer email="none@example.com">bench</maintainer><license>BSD</license>
-</package>
-'''
-SHIM_SCRIPT = '''#!%s
-"""xacro for the benchmark: the PyPI xacro that expand_description runs, same $(find) patch."""
-import sys
-from ur3_ft_gripper_description import description
-sys.exit(description.load_xacro().main())
-'''
-
-
-def xacro_setup(tmp):
+def xacro_setup():
     """(xacro executable, environment for roslaunch, description) for both models."""
     import rospkg
-    env = dict(os.environ)
-    try:
-        path = os.path.join(rospkg.RosPack().get_path('xacro'), 'xacro')
-        if os.path.exists(path):
-            return path, env, 'xacro ROS package (%s)' % path
-    except rospkg.ResourceNotFound:
-        pass
-    # No xacro ROS package (Debian: xacro from PyPI): `$(find xacro)/xacro` in
-    # upstream's load_ur.launch needs one, so a shim goes on ROS_PACKAGE_PATH, for the benchmark only.
-    folder = os.path.join(tmp, 'xacro')
-    os.makedirs(folder)
-    with open(os.path.join(folder, 'package.xml'), 'w') as f:
-        f.write(SHIM_MANIFEST)
-    script = os.path.join(folder, 'xacro')
-    with open(script, 'w') as f:
-        f.write(SHIM_SCRIPT % sys.executable)
-    os.chmod(script, 0o755)
-    env['ROS_PACKAGE_PATH'] = tmp + os.pathsep + env.get('ROS_PACKAGE_PATH', '')
-    from importlib import metadata
-    return script, env, 'PyPI xacro %s through a `xacro` package shim' % metadata.version('xacro')
+    from roslaunch.substitution_args import resolve_args
+    path = resolve_args('$(find xacro)/xacro')  # what upstream's load_ur.launch runs
+    return path, dict(os.environ), 'xacro %s (%s)' % (rospkg.RosPack().get_manifest('xacro').version, path)
 
 
 def upstream_xacro_file():
@@ -141,7 +107,7 @@ def bench_bringup(load_launch, links, env, runs, rospy, tf2_ros, timeout=60.0):
     return times
 
 
-# -- ft300_sim --------------------------------------------------------------------
+# -- ft300_sim (node robotiq_ft_sensor) ---------------------------------------------
 
 class Received(object):
     def __init__(self):
@@ -157,74 +123,101 @@ class Received(object):
         with self.lock:
             return [(r, m) for r, m in self.items if r >= t]
 
+    def last(self):
+        with self.lock:
+            return self.items[-1][1] if self.items else None
+
 
 def gaps(values):
     return [b - a for a, b in zip(values, values[1:])]
 
 
-def bench_ft300(rate, seconds, rospy):
+# (~rate, subscribe to both topics): at 100 Hz also the wrench alone, what the
+# single-topic node published, so that one run compares the two.
+FT300_RUNS = ((100, False), (100, True), (500, True), (1000, True))
+
+
+def bench_ft300(rate, seconds, rospy, both=True):
+    """Rate, gaps and CPU of ft300_sim; `both`: a subscriber on robotiq_ft_sensor too, not only the wrench."""
     from geometry_msgs.msg import WrenchStamped
-    name = 'ft300_bench_%d' % rate
-    received = Received()
-    subscriber = rospy.Subscriber('%s/robotiq_ft_wrench' % name, WrenchStamped, received.add,
-                                  queue_size=10000, tcp_nodelay=True)
-    process = benchlib.node('ft300_sim', '__name:=ft300_sim', '__ns:=/%s' % name, '_rate:=%g' % rate)
+    from robotiq_ft_sensor.msg import ft_sensor
+    name = 'ft300_bench_%d_%s' % (rate, 'both' if both else 'wrench')
+    wrench, stream = Received(), Received()
+    subscribers = [rospy.Subscriber('%s/robotiq_ft_wrench' % name, WrenchStamped, wrench.add,
+                                    queue_size=10000, tcp_nodelay=True)]
+    if both:
+        subscribers.append(rospy.Subscriber('%s/robotiq_ft_sensor' % name, ft_sensor, stream.add,
+                                            queue_size=10000, tcp_nodelay=True))
+    process = benchlib.node('ft300_sim', '__name:=robotiq_ft_sensor', '__ns:=/%s' % name,
+                            '_rate:=%g' % rate)
     try:
-        benchlib.wait_for(lambda: received.since(0), 30, 'ft300_sim at %g Hz' % rate)
+        benchlib.wait_for(lambda: wrench.last() and (stream.last() or not both), 30,
+                          'ft300_sim at %g Hz on %s' % (rate, 'both topics' if both else 'the wrench'))
         time.sleep(1.0)  # warm-up
         cpu0, t0 = benchlib.cpu_seconds(process.pid), time.monotonic()
         time.sleep(seconds)
         cpu1, t1 = benchlib.cpu_seconds(process.pid), time.monotonic()
     finally:
         benchlib.stop(process)
-        subscriber.unregister()
-    window = [(r, m) for r, m in received.since(t0) if r <= t1]
+        for subscriber in subscribers:
+            subscriber.unregister()
+    window = [(r, m) for r, m in wrench.since(t0) if r <= t1]
     stamps = [m.header.stamp.to_sec() for _, m in window]
-    return dict(rate=rate, achieved=len(window) / (t1 - t0),
+    # ft_sensor has no header: its gaps are as received.
+    stream_window = [r for r, _ in stream.since(t0) if r <= t1]
+    return dict(rate=rate, both=both, achieved=len(window) / (t1 - t0),
+                achieved_stream=len(stream_window) / (t1 - t0) if both else None,
                 p99_stamp=benchlib.percentile(gaps(stamps), 99),
                 p99_received=benchlib.percentile(gaps([r for r, _ in window]), 99),
+                p99_stream=benchlib.percentile(gaps(stream_window), 99) if both else None,
                 max_stamp=max(gaps(stamps)), cpu=100.0 * (cpu1 - cpu0) / (t1 - t0))
 
 
-# -- gripper_sim ------------------------------------------------------------------
+# -- gripper_sim (node robotiq2FGripper) ----------------------------------------------
 
 def bench_gripper(commands, rospy):
-    """Seconds from publishing a command to the first joint state that moves toward it."""
-    from sensor_msgs.msg import JointState
-    from std_msgs.msg import Float64
+    """Seconds from publishing a register command to the first status whose gPO moves toward it."""
+    from robotiq_2f_gripper_control.msg import (Robotiq2FGripper_robot_input,
+                                                Robotiq2FGripper_robot_output)
+
+    def command(position):
+        return Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=position, rSP=255, rFR=150)
+
+    def settled_at(position):
+        s = received.last()
+        return s is not None and s.gSTA == 3 and s.gOBJ == 3 and s.gPO == position
+
     received = Received()
-    subscriber = rospy.Subscriber('gripper/joint_states', JointState, received.add, queue_size=1000,
-                                  tcp_nodelay=True)
-    publisher = rospy.Publisher('gripper/command', Float64, queue_size=10, tcp_nodelay=True)
-    process = benchlib.node('gripper_sim', '__name:=gripper_sim')
+    subscriber = rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
+                                  received.add, queue_size=1000, tcp_nodelay=True)
+    publisher = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
+                                queue_size=10, tcp_nodelay=True)
+    process = benchlib.node('gripper_sim', '__name:=robotiq2FGripper')
     latencies = []
     try:
-        benchlib.wait_for(lambda: received.since(0) and publisher.get_num_connections(), 30, 'gripper_sim')
-        publisher.publish(Float64(0.07))
-        time.sleep(1.0)
-        opening = 0.07
+        benchlib.wait_for(lambda: received.last() and publisher.get_num_connections(), 30, 'gripper_sim')
+        publisher.publish(command(100))  # activate (1.5 s), then move to 100
+        benchlib.wait_for(lambda: settled_at(100), 30, 'the gripper activated at gPO 100')
         for i in range(commands):
-            target = 0.06 if i % 2 == 0 else 0.07
-            closing = target < opening  # closing raises finger_joint
-            before = received.since(0)[-1][1].position[0]
+            # 20 counts (12 mm) each way, closing and opening in turn.
+            target = 120 if i % 2 == 0 else 100
+            closing = target > received.last().gPO
             time.sleep(0.0123 * (i % 7) / 7)  # spread the commands over the publish period
+            before = received.last().gPO
             sent = time.monotonic()
-            publisher.publish(Float64(target))
+            publisher.publish(command(target))
             first = None
             end = sent + 2.0
             while first is None and time.monotonic() < end:
                 for r, msg in received.since(sent):
-                    moved = msg.position[0] - before
-                    if (moved > 1e-9) if closing else (moved < -1e-9):
+                    if (msg.gPO > before) if closing else (msg.gPO < before):
                         first = r
                         break
-                    before = msg.position[0]
                 time.sleep(0.001)
             if first is None:
-                raise RuntimeError('gripper_sim did not move toward %g within 2 s' % target)
+                raise RuntimeError('gripper_sim did not move toward gPO %d within 2 s' % target)
             latencies.append(first - sent)
-            opening = target
-            time.sleep(0.25)  # 10 mm at 0.25 m/s takes 40 ms
+            benchlib.wait_for(lambda: settled_at(target), 10, 'the gripper at gPO %d' % target)
     finally:
         benchlib.stop(process)
         subscriber.unregister()
@@ -287,11 +280,15 @@ def report(r):
             goal_text))
     lines += [
         '',
-        '### ft300_sim (TF from robot_state_publisher at 50 Hz; %g s per rate after 1 s warm-up)' % r['ft_seconds'],
+        '### ft300_sim, node robotiq_ft_sensor (TF from robot_state_publisher at 50 Hz; %g s per run '
+        'after 1 s warm-up)' % r['ft_seconds'],
         '',
-        '| ~rate Hz | achieved Hz | p99 gap ms (stamps) | p99 gap ms (received) | max gap ms (stamps) '
-        '| CPU % of one core | goal |',
-        '| ---: | ---: | ---: | ---: | ---: | ---: | --- |',
+        'It publishes robotiq_ft_wrench and robotiq_ft_sensor every cycle; "subscribed" says which of '
+        'them this benchmark receives (a topic without a subscriber is not serialized or sent).',
+        '',
+        '| ~rate Hz | subscribed | achieved Hz wrench / ft_sensor | p99 gap ms wrench (stamps) '
+        '| p99 gap ms received wrench / ft_sensor | max gap ms wrench (stamps) | CPU % of one core | goal |',
+        '| ---: | --- | ---: | ---: | ---: | ---: | ---: | --- |',
     ]
     for f in r['ft300']:
         goal = ''
@@ -300,15 +297,20 @@ def report(r):
             goal = 'p99 < 12 ms, CPU < 5 %%: %s' % ('met' if ok else 'NOT met')
         elif f['rate'] == 1000:
             goal = 'sustained: %s' % ('met' if f['achieved'] >= 0.95 * 1000 else 'NOT met')
-        lines.append('| %d | %.1f | %.1f | %.1f | %.1f | %.1f | %s |' % (
-            f['rate'], f['achieved'], 1e3 * f['p99_stamp'], 1e3 * f['p99_received'],
+        both = f['both']
+        lines.append('| %d | %s | %.1f / %s | %.1f | %.1f / %s | %.1f | %.1f | %s |' % (
+            f['rate'], 'both' if both else 'wrench only', f['achieved'],
+            '%.1f' % f['achieved_stream'] if both else '-', 1e3 * f['p99_stamp'],
+            1e3 * f['p99_received'], '%.1f' % (1e3 * f['p99_stream']) if both else '-',
             1e3 * f['max_stamp'], f['cpu'], goal))
     lat = r['gripper']
     lines += [
         '',
-        '### gripper_sim (~rate 50 Hz: period 20 ms; %d commands)' % len(lat),
+        '### gripper_sim, node robotiq2FGripper (~rate 50 Hz: period 20 ms; %d commands, rPR 100 <-> 120 '
+        'at rSP 255)' % len(lat),
         '',
-        '| command -> first joint state moving toward it | median ms | p95 ms | max ms | goal |',
+        '| Robotiq2FGripperRobotOutput -> first Robotiq2FGripperRobotInput whose gPO moves toward rPR '
+        '| median ms | p95 ms | max ms | goal |',
         '| --- | ---: | ---: | ---: | --- |',
         '| latency | %.1f | %.1f | %.1f | < 40 ms (two periods): %s |' % (
             1e3 * benchlib.median(lat), 1e3 * benchlib.percentile(lat, 95), 1e3 * max(lat),
@@ -326,54 +328,53 @@ def main(argv=None):
     runs = 2 if args.short else 10
     results = dict(short=args.short, date=benchlib.now_text(), machine=benchlib.machine(),
                    load_before=benchlib.load_average(), variant=os.environ.get('ROBOTIQ_VARIANT', '?'))
-    with tempfile.TemporaryDirectory() as tmp:
-        xacro, env, results['xacro'] = xacro_setup(tmp)
-        say('model expansion, %d runs each' % runs)
-        results['expansion'], outputs = bench_expansion(xacro, env, runs)
-        results['links_upstream'] = len(links_of(outputs['upstream']))
-        results['links_ours'] = len(links_of(outputs['ours_users']))
+    xacro, env, results['xacro'] = xacro_setup()
+    say('model expansion, %d runs each' % runs)
+    results['expansion'], outputs = bench_expansion(xacro, env, runs)
+    results['links_upstream'] = len(links_of(outputs['upstream']))
+    results['links_ours'] = len(links_of(outputs['ours_users']))
 
-        master = benchlib.use_new_master()
-        env['ROS_MASTER_URI'] = os.environ['ROS_MASTER_URI']
+    master = benchlib.use_new_master()
+    env['ROS_MASTER_URI'] = os.environ['ROS_MASTER_URI']
+    try:
+        import rospy
+        import tf2_ros
+        rospy.init_node('bench', disable_signals=True)
+        import rospkg
+        up_launch = os.path.join(rospkg.RosPack().get_path('ur_description'), 'launch', 'load_ur3.launch')
+        our_launch = os.path.join(benchlib.PACKAGE_DIR, 'launch', 'load_ur3_ft_gripper.launch')
+        plain_launch = os.path.join(benchlib.BENCH_DIR, 'load_plain_xacro.launch')
+        results['bringup_runs'] = 1 if args.short else 10
+        say('bring-up, %d runs each' % results['bringup_runs'])
+        up_links, our_links = links_of(outputs['upstream']), links_of(outputs['ours_users'])
+        results['bringup'] = {k: [] for k in ('upstream', 'ours', 'ours_plain')}
+        for _ in range(results['bringup_runs']):  # interleaved, like the expansion
+            for key, launch, links in (('upstream', up_launch, up_links), ('ours', our_launch, our_links),
+                                       ('ours_plain', plain_launch, our_links)):
+                if results['bringup'][key] is None:
+                    continue
+                got = bench_bringup(launch, links, env, 1, rospy, tf2_ros,
+                                    timeout=15.0 if key == 'ours_plain' else 60.0)
+                if got is None and key != 'ours_plain':
+                    raise RuntimeError('%s: the model never completed in TF' % launch)
+                results['bringup'][key] = None if got is None else results['bringup'][key] + got
+
+        # The simulated devices against our model in TF, as in the view launch.
+        launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
+                                    'load:=%s' % our_launch, env=env)
         try:
-            import rospy
-            import tf2_ros
-            rospy.init_node('bench', disable_signals=True)
-            import rospkg
-            up_launch = os.path.join(rospkg.RosPack().get_path('ur_description'), 'launch', 'load_ur3.launch')
-            our_launch = os.path.join(benchlib.PACKAGE_DIR, 'launch', 'load_ur3_ft_gripper.launch')
-            plain_launch = os.path.join(benchlib.BENCH_DIR, 'load_plain_xacro.launch')
-            results['bringup_runs'] = 1 if args.short else 10
-            say('bring-up, %d runs each' % results['bringup_runs'])
-            up_links, our_links = links_of(outputs['upstream']), links_of(outputs['ours_users'])
-            results['bringup'] = {k: [] for k in ('upstream', 'ours', 'ours_plain')}
-            for _ in range(results['bringup_runs']):  # interleaved, like the expansion
-                for key, launch, links in (('upstream', up_launch, up_links), ('ours', our_launch, our_links),
-                                           ('ours_plain', plain_launch, our_links)):
-                    if results['bringup'][key] is None:
-                        continue
-                    got = bench_bringup(launch, links, env, 1, rospy, tf2_ros,
-                                        timeout=15.0 if key == 'ours_plain' else 60.0)
-                    if got is None and key != 'ours_plain':
-                        raise RuntimeError('%s: the model never completed in TF' % launch)
-                    results['bringup'][key] = None if got is None else results['bringup'][key] + got
-
-            # The simulated devices against our model in TF, as in the view launch.
-            launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
-                                        'load:=%s' % our_launch, env=env)
-            try:
-                benchlib.wait_for(lambda: rospy.has_param('robot_description'), 60, 'robot_description')
-                results['ft_seconds'] = 2.0 if args.short else 10.0
-                results['ft300'] = []
-                for rate in (100, 500, 1000):
-                    say('ft300_sim at %d Hz' % rate)
-                    results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy))
-                say('gripper_sim latency')
-                results['gripper'] = bench_gripper(6 if args.short else 40, rospy)
-            finally:
-                benchlib.stop(launch)
+            benchlib.wait_for(lambda: rospy.has_param('robot_description'), 60, 'robot_description')
+            results['ft_seconds'] = 2.0 if args.short else 10.0
+            results['ft300'] = []
+            for rate, both in FT300_RUNS:
+                say('ft300_sim at %d Hz, %s' % (rate, 'both topics' if both else 'wrench only'))
+                results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy, both))
+            say('gripper_sim latency')
+            results['gripper'] = bench_gripper(6 if args.short else 40, rospy)
         finally:
-            benchlib.stop(master)
+            benchlib.stop(launch)
+    finally:
+        benchlib.stop(master)
     results['load_after'] = benchlib.load_average()
     text = report(results)
     print(text)

@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Soak: the view launch (headless) for a long time, the simulated FT 300 at 100 Hz and
-gripper commands at 10 Hz; checks that the nodes' resident memory does not grow and
-the wrench stream has no gap.
+gripper register commands at 10 Hz; checks that the nodes' resident memory does not grow
+and the wrench stream has no gap.
 
     python3 bench/soak.py [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
 
-Limits: resident memory of ft300_sim and gripper_sim grows by at most
-5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
+Limits: resident memory of the simulated devices (robotiq_ft_sensor,
+robotiq2FGripper, gripper_joint_states) grows by at most 5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
 (header stamps, i.e. as the node published them; the gaps as received here are
-reported too). Exit status 0 when both hold, 1 otherwise. Started on its own
+reported too); the gripper ends at the last commanded position. Exit status 0
+when all hold, 1 otherwise: a measurement, not a test. Started on its own
 rosmaster on a free port; `tools/quickstart soak` runs it in the workspace.
 """
 import argparse
@@ -113,7 +114,8 @@ def main(argv=None):
         import rospy
         from geometry_msgs.msg import WrenchStamped
         from sensor_msgs.msg import JointState
-        from std_msgs.msg import Float64
+        from robotiq_2f_gripper_control.msg import (Robotiq2FGripper_robot_input,
+                                                    Robotiq2FGripper_robot_output)
 
         launch = benchlib.roslaunch('ur3_ft_gripper_description', 'view_ur3_ft_gripper.launch',
                                     'gui:=false', 'rviz:=false', log=os.environ.get('SOAK_LOG'))
@@ -123,20 +125,31 @@ def main(argv=None):
                          tcp_nodelay=True)
         rospy.Subscriber('gripper/joint_states', JointState, joints.add, queue_size=1000,
                          tcp_nodelay=True)
-        command = rospy.Publisher('gripper/command', Float64, queue_size=10)
+        gripper = {}
+        rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
+                         lambda msg: gripper.update(status=msg), queue_size=10)
+
+        def arrived(position):
+            s = gripper.get('status')
+            return s is not None and s.gPR == position and s.gPO == position and s.gOBJ == 3
+
+        command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
+                                  queue_size=10)
         benchlib.wait_for(lambda: wrench.latest and joints.latest and command.get_num_connections(),
-                          60, 'the wrench, the gripper and its command subscriber')
-        pids = {name: benchlib.node_pid('/' + name) for name in ('ft300_sim', 'gripper_sim')}
+                          60, 'the wrench, the gripper\'s joint states and its command subscriber')
+        pids = {name: benchlib.node_pid('/' + name)
+                for name in ('robotiq_ft_sensor', 'robotiq2FGripper', 'gripper_joint_states')}
 
         stalls = StallWatch()
         start = time.monotonic()
         rss_at_warmup, rss_max, sent = {}, {}, 0
-        target = 0.140
+        target = 0
         rate = rospy.Rate(10)
         while time.monotonic() - start < args.warmup + seconds:
-            # A slow sweep between almost closed and open: the gripper always moves.
-            target = 0.070 + 0.060 * math.sin(2 * math.pi * sent / 100.0)
-            command.publish(Float64(round(target, 6)))
+            # A slow sweep of the position register (rACT 1 activates on the first
+            # command): the gripper always moves.
+            target = int(round(127.5 + 100 * math.sin(2 * math.pi * sent / 100.0)))
+            command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=target, rSP=255, rFR=150))
             sent += 1
             elapsed = time.monotonic() - start
             if elapsed >= args.warmup and not rss_at_warmup:
@@ -156,8 +169,11 @@ def main(argv=None):
         rss_end = {n: benchlib.rss_mb(p) for n, p in pids.items()}
         for n in pids:
             rss_max[n] = max(rss_max[n], rss_end[n])
-        time.sleep(1.0)  # the last command is reached within 0.56 s (full stroke)
-        opening = rospy.wait_for_message('gripper/opening', Float64, 10).data
+        # The last command is reached within 0.56 s (full stroke at rSP 255).
+        try:
+            status = benchlib.wait_for(lambda: arrived(target), 10, 'the gripper at rPR %d' % target)
+        except RuntimeError:
+            status = None
     finally:
         benchlib.stop(launch)
         benchlib.stop(master)
@@ -170,8 +186,8 @@ def main(argv=None):
     gap_limit = args.max_gap_ms / 1e3
     if wrench.max_stamp_gap > gap_limit:
         problems.append('wrench gap %.1f ms (limit %g)' % (1e3 * wrench.max_stamp_gap, 1e3 * gap_limit))
-    if abs(opening - round(target, 6)) > 1e-9:
-        problems.append('gripper at %.4f m, not at the last command %.4f m' % (opening, target))
+    if not status:
+        problems.append('gripper not at the last command rPR %d: %s' % (target, gripper.get('status')))
     measured = seconds
     rows = [
         '| measured | %.0f s after %.0f s warm-up; %d gripper commands at 10 Hz |' % (measured, args.warmup, sent),
@@ -190,8 +206,7 @@ def main(argv=None):
     rows.append('| this process oversleeping 5 ms by > %g ms (machine stalls) / longest | %d / %.0f ms |' % (
         1e3 * LONG_GAP_S, len(stalls.stalls), 1e3 * max([d for _, d in stalls.stalls] or [0.0])))
     rows.append('| machine during the measurement: CPU steal, major page faults | %.1f s, %d |' % (steal, faults))
-    rows.append('| gripper follows the last command | %s |' % (
-        'yes' if abs(opening - round(target, 6)) <= 1e-9 else 'no (%.4f m)' % opening))
+    rows.append('| gripper follows the last command | %s |' % ('yes' if status else 'no'))
     verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems)
     table = '\n'.join(['| | |', '| --- | --- |'] + rows)
     print(table)
@@ -200,7 +215,7 @@ def main(argv=None):
         benchlib.replace_section(args.record, 'soak', '\n'.join([
             '## Soak (`bash tools/quickstart soak`)', '',
             '%s, %s; load average before: %s. The view launch (headless, sim:=true) on its own '
-            'master; ft300_sim at 100 Hz, commands sweeping 0.01..0.13 m at 10 Hz.' % (
+            'master; ft300_sim at 100 Hz, register commands sweeping rPR 28..228 at 10 Hz.' % (
                 benchlib.now_text(), benchlib.machine(), load_before), '',
             table, '', 'Result: %s' % verdict]))
     return 0 if not problems else 1

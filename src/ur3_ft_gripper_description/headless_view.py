@@ -255,7 +255,7 @@ class HeadlessView(object):
 
 
 def main(argv=None):
-    from .cli import _OneLineParser
+    from .model.cli import _OneLineParser
     parser = _OneLineParser(
         prog='view_screenshot',
         description='Run the view launch under Xvfb (no display needed), move the joint sliders '

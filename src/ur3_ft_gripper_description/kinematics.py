@@ -13,7 +13,6 @@ expected transforms in tests.
 import numpy as np
 from transforms3d.axangles import axangle2mat
 from transforms3d.euler import euler2mat, mat2euler
-from transforms3d.quaternions import quat2mat
 from urdf_parser_py import xml_reflection
 from urdf_parser_py.urdf import URDF
 
@@ -49,15 +48,6 @@ def motion_matrix(joint, position):
         t[:3, :3] = axangle2mat(axis, position)
     elif joint.type == 'prismatic':
         t[:3, 3] = np.asarray(axis, dtype=float) * position
-    return t
-
-
-def transform_msg_matrix(msg):
-    """4x4 matrix of a geometry_msgs/Transform (a tf2 lookup's)."""
-    t = np.eye(4)
-    q = msg.rotation
-    t[:3, :3] = quat2mat((q.w, q.x, q.y, q.z))
-    t[:3, 3] = (msg.translation.x, msg.translation.y, msg.translation.z)
     return t
 
 

@@ -4,8 +4,6 @@ again on the same port)."""
 import subprocess
 import tempfile
 
-import yaml
-
 from conftest import benchlib, topic_message, wait_until
 
 NODES = ('/robotiq_ft_sensor', '/robotiq2FGripper', '/gripper_joint_states')
@@ -15,6 +13,13 @@ def system_state(master_uri):
     import rosgraph
     pubs, subs, services = rosgraph.Master('/reliability', master_uri=master_uri).getSystemState()
     return dict(pubs), dict(subs), dict(services)
+
+
+def publishers(master_uri):
+    try:
+        return system_state(master_uri)[0]
+    except Exception:  # the master is still coming up
+        return {}
 
 
 def registered(master_uri):
@@ -29,49 +34,67 @@ def registered(master_uri):
             '/gripper_joint_states' in pubs.get('/gripper/joint_states', []))
 
 
-def set_model(master, description):
-    """robot_description and a static sensor pose: what the respawned nodes need from the new master."""
-    import rosgraph
-    rosgraph.Master('/reliability', master_uri=master.uri).setParam('/robot_description', description)
-    return subprocess.Popen(['rosrun', 'tf2_ros', 'static_transform_publisher', '0', '0', '0', '0', '0',
-                             '3.14159', 'base_link', 'robotiq_ft_frame_id', '__name:=sensor_pose'],
-                            env=master.env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+# The model in TF (load launch, joint_state_publisher, robot_state_publisher) without the
+# simulated devices: what they need from a master. A new master starts empty, so this is
+# started again on it, as a user runs their bring-up again.
+MODEL = ['roslaunch', 'ur3_ft_gripper_description', 'view_ur3_ft_gripper.launch', 'sim:=false',
+         'rviz:=false', 'gui:=false']
+
+
+def start_model(master, log, processes):
+    """The model launch (added to `processes`), once robot_state_publisher publishes TF on this master."""
+    processes.append(subprocess.Popen(MODEL, stdout=log, stderr=subprocess.STDOUT, env=master.env))
+    assert wait_until(lambda: '/robot_state_publisher' in publishers(master.uri).get('/tf', []), 60), \
+        tail(log)
+
+
+def first_messages(env):
+    """A first message of each simulated node's output, from subscribers started now."""
+    return {topic: topic_message(topic, env, timeout=60) or '' for topic in
+            ('/robotiq_ft_wrench', '/Robotiq2FGripperRobotInput', '/gripper/joint_states')}
+
+
+def assert_publishing(env, log, when):
+    got = first_messages(env)
+    assert 'robotiq_ft_frame_id' in got['/robotiq_ft_wrench'], (when, got, tail(log))
+    assert 'gSTA' in got['/Robotiq2FGripperRobotInput'], (when, got, tail(log))
+    assert 'finger_joint' in got['/gripper/joint_states'], (when, got, tail(log))
+
+
+def tail(log, chars=3000):
+    """The end of a roslaunch's output, for the assertion messages."""
+    with open(log.name) as f:
+        return f.read()[-chars:]
 
 
 def test_nodes_exit_once_and_respawn_on_a_restarted_master(master):
-    dump = subprocess.run(['roslaunch', '--dump-params', 'ur3_ft_gripper_description',
-                           'load_ur3_ft_gripper.launch'], stdout=subprocess.PIPE,
-                          universal_newlines=True, env=master.env, check=True).stdout
-    description = yaml.safe_load(dump)['/robot_description']
     log = tempfile.NamedTemporaryFile('w+', suffix='.log')
-    pose = set_model(master, description)
-    launch = subprocess.Popen(['roslaunch', 'ur3_ft_gripper_description', 'sim_devices.launch'],
-                              stdout=log, stderr=subprocess.STDOUT, env=master.env)
+    model_log = tempfile.NamedTemporaryFile('w+', suffix='.log')
+    processes = []  # stopped in reverse order
     try:
-        assert wait_until(lambda: registered(master.uri), 60), system_state(master.uri)
-        assert topic_message('/robotiq_ft_wrench', master.env, timeout=60), 'no wrench before the restart'
+        # One roslaunch after the other: two starting at once race to set /run_id.
+        start_model(master, model_log, processes)
+        processes.append(subprocess.Popen(['roslaunch', 'ur3_ft_gripper_description', 'sim_devices.launch'],
+                                          stdout=log, stderr=subprocess.STDOUT, env=master.env))
+        assert wait_until(lambda: registered(master.uri), 60), (system_state(master.uri), tail(log))
+        assert_publishing(master.env, log, 'before the restart')
+        benchlib.stop(processes.pop(0))  # the model: a new master needs it again
         master.kill()
-        pose.kill()
-        pose.wait()
         master.start()
-        pose = set_model(master, description)
+        start_model(master, model_log, processes)
         # Readiness on the new master: registration, then a first message from each node.
-        assert wait_until(lambda: registered(master.uri), 60), system_state(master.uri)
-        assert 'robotiq_ft_frame_id' in (topic_message('/robotiq_ft_wrench', master.env, timeout=60) or '')
-        assert 'gSTA' in (topic_message('/Robotiq2FGripperRobotInput', master.env, timeout=60) or '')
-        assert 'finger_joint' in (topic_message('/gripper/joint_states', master.env, timeout=60) or '')
+        assert wait_until(lambda: registered(master.uri), 60), (system_state(master.uri), tail(log))
+        assert_publishing(master.env, log, 'after the restart')
         # A new publisher reaches the respawned gripper.
         subprocess.run(['rostopic', 'pub', '-1', '/Robotiq2FGripperRobotOutput',
                         'robotiq_2f_gripper_control/Robotiq2FGripper_robot_output', '{rACT: 1}'],
                        env=master.env, stdout=subprocess.DEVNULL, timeout=30, check=True)
         assert wait_until(lambda: 'gSTA: 3' in (topic_message('/Robotiq2FGripperRobotInput', master.env) or ''), 30)
-        assert launch.poll() is None, 'roslaunch exited'
+        assert processes[0].poll() is None, 'roslaunch of sim_devices.launch exited'
     finally:
-        benchlib.stop(launch)
-        pose.kill()
-        pose.wait()
-    log.seek(0)
-    output = log.read()
+        for process in reversed(processes):
+            benchlib.stop(process)
+    output = tail(log, chars=10 ** 7)
     for node in NODES:
         lines = [line for line in output.splitlines() if node + ': the ROS master' in line]
         assert len(lines) == 1 and 'was restarted' in lines[0] and 'exiting' in lines[0], output[-3000:]

@@ -18,7 +18,9 @@ import tf2_ros
 import yourdfpy
 from sensor_msgs.msg import JointState
 
-from ur3_ft_gripper_description import export, kinematics
+import rostest_helpers
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import export
 
 TIMEOUT = rospy.Duration(20)
 TRIALS = 3
@@ -72,6 +74,23 @@ class ExportFkTest(unittest.TestCase):
             self.assertLess(rospy.Time.now(), deadline, 'robot_state_publisher never subscribed')
             rospy.sleep(0.05)
 
+    def publish_until_in_tf(self, cfg, moving_link):
+        """Publish joint values until robot_state_publisher has put them in TF; their stamp.
+
+        robot_state_publisher skips joint states that come within its publish
+        interval of the last ones it used, so a skipped message is sent again
+        with a new stamp once TF has shown, within a wait, that it did not arrive.
+        """
+        deadline = rospy.Time.now() + TIMEOUT
+        while True:
+            msg = JointState(name=list(cfg), position=[cfg[n] for n in cfg])
+            msg.header.stamp = rospy.Time.now()
+            self.publisher.publish(msg)
+            if self.buffer.can_transform(self.urdf.base_link, moving_link, msg.header.stamp,
+                                         rospy.Duration(0.5)):
+                return msg.header.stamp
+            self.assertLess(rospy.Time.now(), deadline, 'robot_state_publisher never used the joint states')
+
     def test_tf_equals_independent_forward_kinematics_for_random_joint_values(self):
         self.wait_for_subscriber()
         rng = np.random.default_rng(1234)
@@ -83,19 +102,14 @@ class ExportFkTest(unittest.TestCase):
             for name in moving:
                 limit = self.urdf.joint_map[name].limit
                 cfg[name] = float(rng.uniform(max(limit.lower, -np.pi), min(limit.upper, np.pi)))
-            # robot_state_publisher drops joint states that come within its publish
-            # interval (1/50 s by default) of the last ones it used.
-            rospy.sleep(0.2)
-            msg = JointState(name=list(cfg), position=[cfg[n] for n in cfg])
-            msg.header.stamp = rospy.Time.now()
-            self.publisher.publish(msg)
+            stamp = self.publish_until_in_tf(cfg, self.urdf.joint_map[moving[-1]].child)
             self.urdf.update_cfg(cfg)
             for link in self.urdf.link_map:
                 if link == root:
                     continue
-                tf = self.buffer.lookup_transform(root, link, msg.header.stamp, TIMEOUT)
+                tf = self.buffer.lookup_transform(root, link, stamp, TIMEOUT)
                 np.testing.assert_allclose(
-                    kinematics.transform_msg_matrix(tf.transform),
+                    rostest_helpers.transform_matrix(tf.transform),
                     self.urdf.get_transform(link, root), atol=TOLERANCE,
                     err_msg='%s, trial %d, joints %s' % (link, trial, cfg))
 

@@ -10,7 +10,6 @@ import time
 import unittest
 
 import actionlib
-import numpy as np
 import rospkg
 import rospy
 import rostest
@@ -18,9 +17,9 @@ import tf2_ros
 from control_msgs.msg import GripperCommandAction, GripperCommandGoal
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-from ur3_ft_gripper_description import gripper_model, kinematics
-
-TIMEOUT = 30.0
+import rostest_helpers
+from rostest_helpers import TIMEOUT
+from ur3_ft_gripper_description.devices import gripper_model
 # A goal of P m ends within one count of the position register (0.140 m / 227
 # counts = 0.62 mm; the action server truncates to a whole count) plus the
 # finger angle table's error (< 1e-6 rad): 0.7 mm.
@@ -100,13 +99,7 @@ class GripperUpstreamTest(unittest.TestCase):
         wait_status(lambda s: s.gACT == 0 and s.gSTA == 0)
 
     def pad_gap(self):
-        """Gap between the pads' inner faces, from TF."""
-        poses = []
-        for pad in gripper_model.PADS:
-            msg = self.buffer.lookup_transform('robotiq_arg2f_base_link', pad, rospy.Time(0),
-                                               rospy.Duration(TIMEOUT))
-            poses.append(kinematics.transform_msg_matrix(msg.transform))
-        return gripper_model.pad_gap(poses[0], poses[1], self.fingers.pad_thickness)
+        return rostest_helpers.pad_gap(self.buffer, self.fingers)
 
     def test_simple_controller_resets_activates_closes_and_opens(self):
         controller = subprocess.Popen(

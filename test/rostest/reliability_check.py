@@ -12,7 +12,7 @@ from geometry_msgs.msg import WrenchStamped
 from rosgraph_msgs.msg import Log
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-from sim_devices_check import TIMEOUT, Recorder
+from rostest_helpers import TIMEOUT, Recorder
 
 FLOOD_RATE, FLOOD_SECONDS = 1000, 10.0
 GRIPPER_RATE = 50.0
@@ -48,21 +48,29 @@ class ReliabilityTest(unittest.TestCase):
         return [m.msg for (r, m) in self.rosout.items if r >= since and m.name == node
                 and m.level == level and text in m.msg]
 
+    def wait_for_log(self, node, level, text, since, timeout=TIMEOUT):
+        end = time.monotonic() + timeout
+        while not self.logs_from(node, level, text, since):
+            if time.monotonic() > end:
+                raise AssertionError('%s logged no %r within %g s' % (node, text, timeout))
+            time.sleep(0.05)
+
     def test_robot_state_publisher_killed_and_restarted(self):
         self.wrench.next_after(time.monotonic())  # publishing
         killed = time.monotonic()
         os.kill(self.rsp.popen.pid, signal.SIGKILL)  # no clean shutdown, as in a crash
-        time.sleep(2.0)  # ~max_pose_age (0.5 s) plus a generous margin
+        # The node says the pose went stale, and from then on publishes nothing.
+        self.wait_for_log('/robotiq_ft_sensor', Log.WARN, 'is robot_state_publisher running?', killed)
         quiet_since = time.monotonic()
-        time.sleep(1.0)
+        time.sleep(1.0)  # a window to observe silence in: two max_pose_age periods
         self.assertEqual(self.wrench.since(quiet_since), [], 'published for a stale pose')
         self.assertFalse(self.rsp.is_alive())
         type(self).rsp = self.start_rsp()
         self.wrench.next_after(time.monotonic())  # resumes with the new robot_state_publisher
-        time.sleep(1.0)  # any repeated message would show by now
+        self.wait_for_log('/robotiq_ft_sensor', Log.INFO, 'robotiq_ft_wrench at', killed)
+        # Once each: a node that repeated itself every cycle would have logged dozens by now.
         warnings = self.logs_from('/robotiq_ft_sensor', Log.WARN, 'ft300_sim:', killed)
         self.assertEqual(len(warnings), 1, warnings)
-        self.assertIn('is robot_state_publisher running?', warnings[0])
         resumed = self.logs_from('/robotiq_ft_sensor', Log.INFO, 'robotiq_ft_wrench at', killed)
         self.assertEqual(len(resumed), 1, resumed)
 

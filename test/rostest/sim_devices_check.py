@@ -17,7 +17,10 @@ from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq
 from robotiq_ft_sensor.msg import ft_sensor
 from robotiq_ft_sensor.srv import sensor_accessor
 
-from ur3_ft_gripper_description import gripper_model, kinematics
+import rostest_helpers
+from rostest_helpers import TIMEOUT, Recorder
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import gripper_model
 
 G = 9.80665
 GRIPPER_MASS, GRIPPER_COM = 0.975, np.array([0.0, 0.0, 0.062])  # config/sim_devices.yaml
@@ -28,7 +31,6 @@ ARM = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
 TOOL_DOWN = [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0]
 ZERO = [0.0] * 6  # the gripper points along base_link +y: horizontal
 SENSOR = 'robotiq_ft_frame_id'
-TIMEOUT = 20.0
 # The stream's resolution, 0.01 N and 0.001 Nm: a reading is within half a count of the exact wrench.
 FORCE_ATOL, TORQUE_ATOL = 0.0051, 0.00051
 
@@ -43,32 +45,6 @@ def wrench_arrays(msg):
     w = msg.wrench
     return (np.array([w.force.x, w.force.y, w.force.z]),
             np.array([w.torque.x, w.torque.y, w.torque.z]))
-
-
-class Recorder(object):
-    """Messages of one topic with their receipt time."""
-
-    def __init__(self, topic, msg_type):
-        self.items = []
-        self.lock = threading.Lock()
-        rospy.Subscriber(topic, msg_type, self._add, queue_size=1000)
-
-    def _add(self, msg):
-        with self.lock:
-            self.items.append((time.monotonic(), msg))
-
-    def since(self, t):
-        with self.lock:
-            return [m for (r, m) in self.items if r >= t]
-
-    def next_after(self, t, timeout=TIMEOUT):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            got = self.since(t)
-            if got:
-                return got[0]
-            time.sleep(0.01)
-        raise AssertionError('nothing received within %g s' % timeout)
 
 
 class SimDevicesTest(unittest.TestCase):
@@ -127,8 +103,7 @@ class SimDevicesTest(unittest.TestCase):
     # -- helpers -------------------------------------------------------------
 
     def lookup(self, target, source):
-        msg = self.buffer.lookup_transform(target, source, rospy.Time(0), rospy.Duration(TIMEOUT))
-        return kinematics.transform_msg_matrix(msg.transform)
+        return rostest_helpers.lookup(self.buffer, target, source)
 
     def move_to(self, arm):
         """Publish `arm`, wait until TF shows it; returns the sensor's orientation in base_link."""

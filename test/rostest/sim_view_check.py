@@ -11,9 +11,10 @@ from geometry_msgs.msg import WrenchStamped
 from sensor_msgs.msg import JointState
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-from ur3_ft_gripper_description import gripper_model, kinematics
-
-TIMEOUT = 20.0
+import rostest_helpers
+from rostest_helpers import TIMEOUT
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import gripper_model
 
 
 class SimViewTest(unittest.TestCase):
@@ -29,18 +30,10 @@ class SimViewTest(unittest.TestCase):
                                                       prefix=cls.prefix)
         cls.command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
                                       queue_size=1)
-        end = time.monotonic() + TIMEOUT
-        while cls.command.get_num_connections() == 0 and time.monotonic() < end:
-            time.sleep(0.05)
+        rostest_helpers.wait_for_subscribers(cls.command)
 
     def pad_gap(self):
-        """Gap between the two finger pads' inner faces, from TF."""
-        poses = []
-        for pad in gripper_model.PADS:
-            msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + pad,
-                                               rospy.Time(0), rospy.Duration(TIMEOUT))
-            poses.append(kinematics.transform_msg_matrix(msg.transform))
-        return gripper_model.pad_gap(poses[0], poses[1], self.fingers.pad_thickness)
+        return rostest_helpers.pad_gap(self.buffer, self.fingers, prefix=self.prefix)
 
     def finger_angle(self):
         msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)

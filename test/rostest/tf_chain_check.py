@@ -1,19 +1,26 @@
 #!/usr/bin/env python3
-"""rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads."""
+"""rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads.
+
+robot_description comes from the load launch as users run it, which expands
+the model with the ROS 1 xacro that Noetic has (ros/xacro noetic-devel).
+"""
+import importlib.util
 import os
 import unittest
 
 import numpy as np
+import rospkg
 import rospy
 import rostest
 import tf2_ros
 
-from ur3_ft_gripper_description import description, kinematics
+import rostest_helpers
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import description
 
 CHAIN = ['base_link', 'tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_ft_frame_id',
          'robotiq_arg2f_base_link']
 PADS = ['left_inner_finger_pad', 'right_inner_finger_pad']
-TIMEOUT = rospy.Duration(30)
 
 FT300_ALONE = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'data', 'ft300_alone.xacro')
 
@@ -28,8 +35,16 @@ class TfChainTest(unittest.TestCase):
 
     def lookup(self, target, source):
         """Pose of `source` in `target` as a 4x4 matrix, from TF."""
-        msg = self.buffer.lookup_transform(target, source, rospy.Time(0), TIMEOUT)
-        return kinematics.transform_msg_matrix(msg.transform)
+        return rostest_helpers.lookup(self.buffer, target, source)
+
+    def test_the_model_was_expanded_by_ros1_xacro(self):
+        # The launch's expand_description imports the xacro that this node sees.
+        version = rospkg.RosPack().get_manifest('xacro').version
+        self.assertEqual(version.split('.')[:2], ['1', '14'], 'xacro %s is not ROS 1 xacro' % version)
+        self.assertGreaterEqual(int(version.split('.')[2]), 10)
+        self.assertIsNotNone(importlib.util.find_spec('xacro'))
+        self.assertIsNone(importlib.util.find_spec('xacro.substitution_args'), "ROS 2's xacro is on the path")
+        self.assertIn('<robot name="ur3_ft_gripper"', rospy.get_param('robot_description'))
 
     def test_chain_from_base_link_through_sensor_to_gripper(self):
         for parent, child in zip(CHAIN, CHAIN[1:]):

@@ -8,7 +8,8 @@ import sys
 import pytest
 import rospkg
 
-from ur3_ft_gripper_description import description, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import description
 
 PACKAGE = 'ur3_ft_gripper_description'
 PACKAGE_DIR = rospkg.RosPack().get_path(PACKAGE)

@@ -5,7 +5,7 @@ import subprocess
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, UR_CONFIG, assert_one_line_error, run_expand
+from conftest import UR_CONFIG, assert_one_line_error, run_expand
 
 
 def kinematics_without(tmp_path, segment):

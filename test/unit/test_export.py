@@ -6,7 +6,7 @@ import pytest
 import yourdfpy
 
 from conftest import ExpandedModel, run_export
-from ur3_ft_gripper_description import export
+from ur3_ft_gripper_description.model import export
 
 CASES = {  # name -> export_urdf options
     'ur3-default': [],
@@ -80,7 +80,8 @@ def test_help_documents_every_option():
                    '--joint-limit-params', '--kinematics-params', '--physical-params',
                    '--visual-params', '--absolute-meshes', '--output'):
         assert option in run.stdout, option
-    assert 'ur3, ur3e, ur5, ur5e, ur10, ur10e, ur16e, ur20, ur30' in ' '.join(run.stdout.split())
+    assert 'installed ur_description/config: ur3, ur3e, ur5, ur5e, ur10, ur10e, ur16e, ur20, ur30' in \
+        ' '.join(run.stdout.split())
 
 
 @pytest.mark.parametrize('options,words', [

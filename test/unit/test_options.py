@@ -1,24 +1,71 @@
 """ur_type, the part toggles and world: what they accept, what they refuse, what they add."""
 import os
+import shutil
 import subprocess
 import textwrap
 
 import numpy as np
 import pytest
+import rospkg
+import yaml
+from roslaunch.substitution_args import resolve_args
 
 from conftest import UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, assert_one_line_error, run_expand
-from ur3_ft_gripper_description import description, kinematics
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import description
 
-PARAMETER_FILES = ('joint_limits.yaml', 'default_kinematics.yaml', 'physical_parameters.yaml',
-                   'visual_parameters.yaml')
+PARAMETER_FILES = tuple(description.UR_DEFAULT_FILES.values())
 VALID_LIST = ', '.join(UR_TYPES)
+PINNED_UR_TYPES = ['ur3', 'ur3e', 'ur5', 'ur5e', 'ur10', 'ur10e', 'ur16e', 'ur20', 'ur30']  # 1.3.2
 
 
-def test_ur_types_are_exactly_the_models_ur_description_ships():
-    shipped = sorted(d for d in os.listdir(UR_CONFIG_ROOT)
-                     if all(os.path.isfile(os.path.join(UR_CONFIG_ROOT, d, f)) for f in PARAMETER_FILES))
-    assert sorted(UR_TYPES) == shipped
-    assert set(UR_TYPES) == {'ur3', 'ur3e', 'ur5', 'ur5e', 'ur10', 'ur10e', 'ur16e', 'ur20', 'ur30'}
+def test_ur_types_are_the_models_the_pinned_ur_description_ships():
+    assert UR_TYPES == PINNED_UR_TYPES
+
+
+@pytest.fixture
+def ur_description_with_ur7e(tmp_path):
+    """ROS_PACKAGE_PATH with a ur_description whose config/ also has a 'ur7e' (ur5e's files).
+
+    The copy holds links to the installed package's files and a config folder
+    of its own, in the test's temporary folder, ahead of the installed one.
+    """
+    installed = rospkg.RosPack().get_path('ur_description')
+    copy = tmp_path / 'ur_description'
+    copy.mkdir()
+    for name in os.listdir(installed):
+        if name != 'config':
+            os.symlink(os.path.join(installed, name), str(copy / name))
+    shutil.copytree(os.path.join(installed, 'config'), str(copy / 'config'))
+    shutil.copytree(str(copy / 'config' / 'ur5e'), str(copy / 'config' / 'ur7e'))
+    env = dict(os.environ, ROS_PACKAGE_PATH=os.pathsep.join([str(tmp_path), os.environ['ROS_PACKAGE_PATH']]))
+    assert rospkg.RosPack(rospkg.get_ros_paths(env)).get_path('ur_description') == str(copy)
+    return env
+
+
+def test_a_model_that_the_installed_ur_description_adds_works(ur_description_with_ur7e, tmp_path):
+    run = run_expand('ur_type:=ur7e', '-o', str(tmp_path / 'ur7e.urdf'), env=ur_description_with_ur7e)
+    assert run.returncode == 0, run.stderr
+    model = ExpandedModel((tmp_path / 'ur7e.urdf').read_text())
+    ur5e = os.path.join(UR_CONFIG_ROOT, 'ur5e', 'default_kinematics.yaml')
+    with open(ur5e) as f:
+        shoulder_height = yaml.safe_load(f)['kinematics']['shoulder']['z']
+    assert model.origin_xyz('shoulder_pan_joint')[2] == pytest.approx(shoulder_height)
+    model.assert_joint_between('robotiq_ft_frame_id', 'robotiq_arg2f_base_link', 'fixed')
+
+
+def test_the_load_launch_takes_a_model_that_the_installed_ur_description_adds(ur_description_with_ur7e):
+    run = subprocess.run(['roslaunch', '--dump-params', 'ur3_ft_gripper_description',
+                          'load_ur_ft_gripper.launch', 'ur_type:=ur7e'],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                         env=ur_description_with_ur7e, timeout=120)
+    assert run.returncode == 0 and 'expand_description: error' not in run.stderr, run.stderr
+    assert '/robot_description' in run.stdout and 'robotiq_arg2f_base_link' in run.stdout
+
+
+def test_unknown_ur_type_lists_what_the_installed_ur_description_ships(ur_description_with_ur7e):
+    run = run_expand('ur_type:=ur4', env=ur_description_with_ur7e)
+    assert_one_line_error(run, "ur_type 'ur4'", 'installed ur_description', 'ur5e, ur7e, ur10')
 
 
 @pytest.mark.parametrize('ur_type', ['ur4', 'UR3', 'ur3 ', ''])
@@ -26,17 +73,27 @@ def test_unknown_ur_type_is_one_line_listing_the_valid_ones(ur_type):
     assert_one_line_error(run_expand('ur_type:=%s' % ur_type), 'ur_type', VALID_LIST)
 
 
-def test_plain_xacro_on_the_macro_also_names_the_valid_ur_types(tmp_path):
+def _cell_with_ur_type(tmp_path, ur_type):
     cell = tmp_path / 'cell.xacro'
     cell.write_text(textwrap.dedent('''\
         <robot name="cell" xmlns:xacro="http://wiki.ros.org/xacro">
           <xacro:include filename="$(find ur3_ft_gripper_description)/urdf/inc/ur3_ft_gripper_macro.xacro"/>
-          <xacro:ur3_ft_gripper prefix="" ur_type="ur6"/>
-        </robot>'''))
-    with pytest.raises(description.DescriptionError) as error:
-        description.run_xacro(str(cell))
-    assert "ur_type 'ur6'" in str(error.value) and VALID_LIST in str(error.value)
-    assert '\n' not in str(error.value)
+          <xacro:ur3_ft_gripper prefix="" ur_type="%s"/>
+        </robot>''' % ur_type))
+    return str(cell)
+
+
+def test_expand_description_on_a_cell_names_the_valid_ur_types(tmp_path):
+    assert_one_line_error(run_expand(_cell_with_ur_type(tmp_path, 'ur6')), "ur_type 'ur6'", VALID_LIST)
+
+
+def test_plain_xacro_on_a_cell_names_the_missing_model_folder(tmp_path):
+    # xacro cannot list ur_description's models; its own error names the folder it lacks.
+    run = subprocess.run([resolve_args('$(find xacro)/xacro'), _cell_with_ur_type(tmp_path, 'ur6')],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, timeout=120)
+    assert run.returncode != 0
+    assert 'No such file or directory' in run.stderr
+    assert os.path.join('ur_description', 'config', 'ur6', 'joint_limits.yaml') in run.stderr
 
 
 @pytest.mark.parametrize('arg', ['ft_sensor', 'gripper', 'world'])

@@ -5,8 +5,9 @@ import numpy as np
 import pytest
 
 from conftest import PACKAGE_DIR
-from ur3_ft_gripper_description import gripper_joint_states, gripper_model, kinematics, wrench_model
-from ur3_ft_gripper_description.wrench_model import STANDARD_GRAVITY as G
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import gripper_joint_states, gripper_model, wrench_model
+from ur3_ft_gripper_description.devices.wrench_model import STANDARD_GRAVITY as G
 
 PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'sim_devices.yaml')
 

@@ -1,11 +1,10 @@
 """The simulated-device nodes' logic without a ROS master: parameters, warnings, motion."""
-import math
 
 import numpy as np
 import pytest
 from transforms3d.quaternions import quat2mat
 
-from ur3_ft_gripper_description import ft300_sim, gripper_joint_states, gripper_sim, sim_params
+from ur3_ft_gripper_description.devices import ft300_sim, gripper_joint_states, gripper_sim, sim_params
 
 
 def params(**values):

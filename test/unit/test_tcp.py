@@ -6,7 +6,8 @@ import pytest
 import yaml
 
 from conftest import PACKAGE_DIR, robotiq_variant
-from ur3_ft_gripper_description import kinematics, tcp
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.model import tcp
 
 TCP_YAML = os.path.join(PACKAGE_DIR, 'config', 'gripper_tcp.yaml')
 

@@ -41,7 +41,7 @@ import math
 import threading
 import time
 
-from ur3_ft_gripper_description import gripper_model, node_loop, sim_params
+from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 
 # A kind of nonsense register value is warned about at most once per this many seconds.
 RATE_LIMIT = 10.0

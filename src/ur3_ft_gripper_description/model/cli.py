@@ -70,6 +70,14 @@ class _OneLineParser(argparse.ArgumentParser):
         sys.exit(1)
 
 
+def _installed_ur_types():
+    """': ur3, ur3e, ...' for --help; nothing when ur_description is missing (the run says so)."""
+    try:
+        return ': ' + ', '.join(description.ur_types())
+    except description.DescriptionError:
+        return ''
+
+
 def export_urdf_main(argv=None):
     from . import export
     parser = _OneLineParser(
@@ -79,7 +87,8 @@ def export_urdf_main(argv=None):
                     'packages. Mesh paths stay package:// URIs unless --absolute-meshes is given. '
                     'Errors are one line and exit with status 1; no file is written then.')
     parser.add_argument('--ur-type', default='ur3',
-                        help='UR model, one of %s (default: ur3)' % ', '.join(description.ur_types()))
+                        help='UR model: a folder of the installed ur_description/config%s '
+                             '(default: ur3)' % _installed_ur_types())
     parser.add_argument('--prefix', default='', help='prefix for every link and joint, e.g. left_')
     parser.add_argument('--no-ft-sensor', action='store_true',
                         help='leave out the FT 300; the gripper then sits on tool0 through the coupling')

@@ -7,7 +7,7 @@ the same checked pipeline as ``expand_description`` and can rewrite every
 
 import os
 
-from ur3_ft_gripper_description import description
+from ur3_ft_gripper_description.model import description
 
 PACKAGE_SCHEME = 'package://'
 FILE_SCHEME = 'file://'

@@ -34,7 +34,7 @@ never publishes a wrench for a pose it does not know.
 import dataclasses
 import numpy as np
 
-from ur3_ft_gripper_description import node_loop, sim_params, wrench_model
+from ur3_ft_gripper_description.devices import node_loop, sim_params, wrench_model
 
 
 @dataclasses.dataclass

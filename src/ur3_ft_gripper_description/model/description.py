@@ -13,7 +13,6 @@ files and then:
 import os
 import re
 import subprocess
-import xml.dom.minidom
 
 import yaml
 
@@ -38,6 +37,13 @@ PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 # macro reads from each (ur_description/urdf/inc/ur_common.xacro).
 UR_JOINTS = ('shoulder_pan', 'shoulder_lift', 'elbow_joint', 'wrist_1', 'wrist_2', 'wrist_3')
 UR_KINEMATIC_SEGMENTS = ('shoulder', 'upper_arm', 'forearm', 'wrist_1', 'wrist_2', 'wrist_3')
+# The file in ur_description/config/<ur_type>/ that each arg defaults to (in the macro).
+UR_DEFAULT_FILES = {
+    'joint_limit_params': 'joint_limits.yaml',
+    'kinematics_params': 'default_kinematics.yaml',
+    'physical_params': 'physical_parameters.yaml',
+    'visual_params': 'visual_parameters.yaml',
+}
 PARAMETER_FILE_ARGS = {
     'joint_limit_params': ('joint_limits', UR_JOINTS),
     'kinematics_params': ('kinematics', UR_KINEMATIC_SEGMENTS),
@@ -76,18 +82,28 @@ def check_prefix(prefix):
             "(not first), e.g. prefix:=left_ or prefix:=robot1/" % prefix)
 
 
-def ur_types():
-    """The UR models the package accepts (config/ur_types.yaml, shared with the macro)."""
-    path = os.path.join(package_path('ur3_ft_gripper_description'), 'config', 'ur_types.yaml')
-    with open(path) as f:
-        return list(yaml.safe_load(f)['ur_types'])
+def ur_types(rospack=None):
+    """The UR models the installed ur_description ships, in its own order (ur3, ur3e, ur5, ...).
+
+    A model is a folder of ur_description/config with the four default
+    parameter files that the macro picks for ur_type.
+    """
+    config = os.path.join(package_path('ur_description', rospack), 'config')
+    models = [name for name in os.listdir(config)
+              if all(os.path.isfile(os.path.join(config, name, f)) for f in UR_DEFAULT_FILES.values())]
+    return sorted(models, key=lambda name: [int(part) if part.isdigit() else part
+                                            for part in re.split(r'(\d+)', name)])
+
+
+def unknown_ur_type_error(ur_type, rospack=None):
+    return DescriptionError(
+        "ur_type %r is not a UR model that the installed ur_description ships: use one of %s"
+        % (ur_type, ', '.join(ur_types(rospack))))
 
 
 def check_ur_type(ur_type):
-    valid = ur_types()
-    if ur_type not in valid:
-        raise DescriptionError("ur_type %r is not a UR model that ur_description ships: use one of %s"
-                               % (ur_type, ', '.join(valid)))
+    if ur_type not in ur_types():
+        raise unknown_ur_type_error(ur_type)
 
 
 def check_boolean(arg, value):
@@ -131,10 +147,7 @@ def check_parameter_file(arg, path):
         return
     section, required = PARAMETER_FILE_ARGS[arg]
     fix = 'give %s:=<path to a YAML file like ur_description/config/ur3/%s>' % (
-        arg, {'joint_limit_params': 'joint_limits.yaml',
-              'kinematics_params': 'default_kinematics.yaml',
-              'physical_params': 'physical_parameters.yaml',
-              'visual_params': 'visual_parameters.yaml'}[arg])
+        arg, UR_DEFAULT_FILES[arg])
     if not os.path.isfile(path):
         raise DescriptionError('%s: file not found: %s; %s' % (arg, path, fix))
     try:
@@ -169,14 +182,28 @@ def load_xacro():
     return xacro
 
 
-def _unwrap(exc):
-    """The DescriptionError behind a xacro exception, if any."""
+def _causes(exc):
+    """`exc` and the exceptions behind it (xacro wraps them in XacroException.exc)."""
     seen = set()
     while exc is not None and id(exc) not in seen:
-        if isinstance(exc, DescriptionError):
-            return exc
+        yield exc
         seen.add(id(exc))
         exc = getattr(exc, 'exc', None) or exc.__cause__ or exc.__context__
+
+
+def _explain(exc):
+    """The one-line DescriptionError for a xacro failure whose cause we know, else None."""
+    for cause in _causes(exc):
+        if isinstance(cause, DescriptionError):
+            return cause
+        if isinstance(cause, FileNotFoundError) and cause.filename:
+            # The macro's default parameter file of a ur_type that ur_description lacks.
+            folder, name = os.path.split(os.path.realpath(cause.filename))
+            config = os.path.realpath(os.path.join(package_path('ur_description'), 'config'))
+            model = os.path.basename(folder)
+            if (os.path.dirname(folder) == config and name in UR_DEFAULT_FILES.values()
+                    and model not in ur_types()):
+                return unknown_ur_type_error(model)
     return None
 
 
@@ -192,9 +219,9 @@ def run_xacro(xacro_file, mappings=None):
     try:
         return xacro.process_file(xacro_file, mappings=mappings)
     except Exception as e:  # xacro raises many types; all become one line
-        inner = _unwrap(e)
-        if inner is not None:
-            raise inner from None
+        known = _explain(e)
+        if known is not None:
+            raise known from None
         text = ' '.join(str(e).split()) or type(e).__name__
         raise DescriptionError('xacro failed on %s: %s' % (xacro_file, text)) from None
 

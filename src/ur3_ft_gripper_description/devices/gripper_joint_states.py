@@ -22,7 +22,7 @@ Private parameters:
   ~devices_file  config/sim_devices.yaml
 """
 
-from ur3_ft_gripper_description import gripper_model, sim_params
+from ur3_ft_gripper_description.devices import gripper_model, sim_params
 
 # Samples of the finger angle table: interpolation in it is within 1e-6 rad of
 # the exact inverse (test_sim_models checks it).
@@ -58,7 +58,7 @@ def run(rospy):
     from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input
     from sensor_msgs.msg import JointState
 
-    from ur3_ft_gripper_description import node_loop
+    from ur3_ft_gripper_description.devices import node_loop
 
     name = rospy.get_name()
     try:
