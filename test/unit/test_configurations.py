@@ -33,7 +33,8 @@ def test_check_urdf_accepts_it_with_one_root(configured_model, config, tmp_path)
                          stderr=subprocess.STDOUT, universal_newlines=True)
     assert run.returncode == 0, run.stdout
     assert 'root Link: base_link' in run.stdout
-    assert model.root() == 'base_link' and 'world' not in model.links
+    assert model.root() == 'base_link'
+    model.assert_lacks_link('world')
 
 
 def test_links_present_exactly_for_the_parts_chosen(configured_model, config):
@@ -81,7 +82,7 @@ def test_arm_is_the_ur_type_from_its_own_parameter_files(configured_model, confi
 def test_tcp_sits_between_the_closed_pads_on_the_flange_axis(configured_model, config):
     model = model_of(configured_model, config)
     if not config['gripper']:
-        assert 'gripper_tcp' not in model.links
+        model.assert_lacks_link('gripper_tcp')
         return
     pose = model.transform('tool0', 'gripper_tcp')
     with open(os.path.join(os.path.dirname(__file__), '..', '..', 'config', 'gripper_tcp.yaml')) as f:

@@ -30,7 +30,7 @@ def test_check_urdf_accepts_the_model(default_model, tmp_path):
 
 def test_one_root_base_link_and_no_world(default_model):
     assert default_model.root() == 'base_link'
-    assert 'world' not in default_model.links
+    default_model.assert_lacks_link('world')
 
 
 def test_link_and_joint_names_are_unique(default_model):

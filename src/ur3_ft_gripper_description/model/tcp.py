@@ -22,7 +22,6 @@ import numpy as np
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model.description import FINGER_JOINT, GRIPPER_BASE, PADS
 
-TCP_LINK = 'gripper_tcp'
 YAML_KEY = 'gripper_tcp_in_gripper_base'
 KEYS = ('x', 'y', 'z', 'roll', 'pitch', 'yaw')
 # Largest spread between the models written into one file (m, rad).
