@@ -20,7 +20,9 @@ from ur3_ft_gripper_description import headless_view, kinematics
 
 PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(PACKAGE_DIR, 'bench'))
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
 import benchlib  # noqa: E402  (one way to find a free port)
+import rostest_helpers  # noqa: E402  (TF lookups as matrices)
 
 VIEW_COMMAND = ['rosrun', 'ur3_ft_gripper_description', 'view_screenshot']
 SETTINGS = headless_view.settings()
@@ -115,8 +117,7 @@ def test_a_slider_moved_with_the_keyboard_moves_the_arm_in_joint_states_and_tf(t
         upper = model.joints[JOINT].limit.upper
 
         def tf(link):
-            msg = buffer.lookup_transform('base_link', link, rospy.Time(0), rospy.Duration(TIMEOUT))
-            return kinematics.transform_msg_matrix(msg.transform)
+            return rostest_helpers.lookup(buffer, 'base_link', link, TIMEOUT)
 
         names, before = joint_positions()
         assert before[JOINT] == pytest.approx(0.0, abs=1e-3)
