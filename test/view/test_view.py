@@ -1,0 +1,153 @@
+"""The README's view command without a display, as CI's proof that it works.
+
+`tools/quickstart view` runs `rosrun ur3_ft_gripper_description view_screenshot`
+when there is no display; these tests run that same command, or its
+HeadlessView, each on its own ROS master (roslaunch starts it on a free port).
+"""
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+import rospy
+import tf2_ros
+import yaml
+from sensor_msgs.msg import JointState
+
+from ur3_ft_gripper_description import headless_view, kinematics
+
+PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'bench'))
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
+import benchlib  # noqa: E402  (one way to find a free port)
+import rostest_helpers  # noqa: E402  (TF lookups as matrices)
+
+VIEW_COMMAND = ['rosrun', 'ur3_ft_gripper_description', 'view_screenshot']
+SETTINGS = headless_view.settings()
+SCREEN = (SETTINGS['screen_width'], SETTINGS['screen_height'])
+# The joint the slider test moves, and the links it moves and does not move.
+JOINT = 'elbow_joint'
+MOVED = ['forearm_link', 'wrist_1_link', 'wrist_2_link', 'wrist_3_link', 'tool0', 'robotiq_ft_frame_id',
+         'gripper_tcp']
+STILL = ['shoulder_link', 'upper_arm_link']
+TIMEOUT = 60.0
+
+
+def own_master_env():
+    return dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % benchlib.free_port())
+
+
+def run_view(tmp_path, *args):
+    """The view command as quickstart runs it; (status, stdout, stderr, screenshot path, log path)."""
+    shot, log = str(tmp_path / 'view.png'), str(tmp_path / 'view.log')
+    done = subprocess.run(VIEW_COMMAND + ['--output', shot, '--log', log] + list(args),
+                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                          env=own_master_env(), timeout=900)
+    return done.returncode, done.stdout, done.stderr, shot, log
+
+
+def log_tail(log):
+    with open(log) as f:
+        return ''.join(f.readlines()[-20:])
+
+
+def test_view_command_saves_a_screenshot_that_shows_the_robot(tmp_path):
+    status, out, err, shot, log = run_view(tmp_path)
+    assert status == 0, 'view_screenshot failed: %s\n%s' % (err, log_tail(log))
+    assert out.strip() == 'screenshot: %s' % shot
+    assert os.path.isfile(shot)
+    verdict = headless_view.check_screenshot(shot)
+    assert verdict.size == SCREEN
+    assert verdict.view_box is not None, 'no 3D view in the screenshot'
+    assert verdict.shows_robot, verdict
+    assert verdict.robot_fraction >= SETTINGS['min_robot_fraction'], verdict
+    assert verdict.arm_blue_pixels >= SETTINGS['min_arm_blue_pixels'], verdict
+
+
+def test_a_screenshot_of_rviz_without_the_robot_fails_the_check(tmp_path):
+    """The same command and check with RViz's RobotModel display removed: the 3D view must not pass."""
+    with open(headless_view.default_rviz_config()) as f:
+        config = yaml.safe_load(f)
+    displays = config['Visualization Manager']['Displays']
+    config['Visualization Manager']['Displays'] = [d for d in displays if d['Class'] != 'rviz/RobotModel']
+    assert len(config['Visualization Manager']['Displays']) == len(displays) - 1
+    empty = tmp_path / 'no_robot_model.rviz'
+    empty.write_text(yaml.safe_dump(config))
+    status, out, err, shot, log = run_view(tmp_path, '--robot-timeout', '30', 'rviz_config:=%s' % empty)
+    assert status == 1, 'view_screenshot passed without the robot: %s' % out
+    assert err.strip().splitlines()[-1].startswith('view_screenshot: error: the robot did not show in RViz'), err
+    verdict = headless_view.check_screenshot(shot, str(empty))
+    assert verdict.size == SCREEN
+    # A live 3D view: the grid is drawn and the simulated FT 300's wrench arrow
+    # (which needs TF from robot_state_publisher) is there; only the robot is not.
+    assert verdict.view_box is not None and verdict.grid_fraction > 0.01, verdict
+    assert verdict.wrench_pixels > 0, verdict
+    assert not verdict.shows_robot, verdict
+    assert verdict.robot_fraction < SETTINGS['min_robot_fraction'], verdict
+
+
+def joint_positions():
+    msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)
+    return msg.name, dict(zip(msg.name, msg.position))
+
+
+def wait_until(predicate, what):
+    end = time.monotonic() + TIMEOUT
+    while time.monotonic() < end:
+        value = predicate()
+        if value:
+            return value
+        time.sleep(0.1)
+    pytest.fail('timed out after %g s waiting for %s' % (TIMEOUT, what))
+
+
+def test_a_slider_moved_with_the_keyboard_moves_the_arm_in_joint_states_and_tf(tmp_path):
+    os.environ.update(own_master_env())
+    with headless_view.HeadlessView([], str(tmp_path / 'view.log')) as view:
+        view.open()
+        geometry = view.xdotool('getwindowgeometry', '--shell', view.sliders_window).stdout
+        assert 'X=%d\n' % SETTINGS['sliders_x'] in geometry and 'Y=%d\n' % SETTINGS['sliders_y'] in geometry, \
+            'the slider window is not beside RViz: %s' % geometry
+        rospy.init_node('view_slider_check', anonymous=True, disable_signals=True)
+        buffer = tf2_ros.Buffer()
+        tf2_ros.TransformListener(buffer)
+        model = kinematics.Model(rospy.get_param('robot_description'))
+        upper = model.joints[JOINT].limit.upper
+
+        def tf(link):
+            return rostest_helpers.lookup(buffer, 'base_link', link, TIMEOUT)
+
+        names, before = joint_positions()
+        assert before[JOINT] == pytest.approx(0.0, abs=1e-3)
+        tf_before = {link: tf(link) for link in MOVED + STILL}
+
+        # joint_state_publisher_gui gives every free joint, in joint_states'
+        # order, a value field and then a slider: Tab from the window's start
+        # reaches this joint's slider after 2 * index + 2 steps; End moves a
+        # Qt slider to its maximum, the joint's upper limit.
+        free = [n for n in names if model.joints[n].mimic is None]
+        assert view.xdotool('windowfocus', '--sync', view.sliders_window).returncode == 0
+        for _ in range(2 * free.index(JOINT) + 2):
+            view.xdotool('key', 'Tab')
+        view.xdotool('key', 'End')
+
+        def at_limit():
+            positions = joint_positions()[1]
+            return positions if abs(positions[JOINT] - upper) < 1e-3 else None
+        after = wait_until(at_limit, '%s at its upper limit %g in joint_states' % (JOINT, upper))
+        for name in free:
+            if name not in (JOINT, 'finger_joint'):
+                assert after[name] == pytest.approx(before[name], abs=1e-6), '%s moved too' % name
+        expected = {link: model.transform('base_link', link, after) for link in MOVED + STILL}
+        wait_until(lambda: np.allclose(tf('forearm_link'), expected['forearm_link'], atol=1e-4),
+                   'TF of forearm_link with %s at %g' % (JOINT, upper))
+        for link in MOVED:
+            moved = tf(link)
+            assert np.allclose(moved, expected[link], atol=1e-4), '%s in TF is not where the model puts it' % link
+            assert np.linalg.norm(moved[:3, 3] - tf_before[link][:3, 3]) > 0.01 or \
+                not np.allclose(moved[:3, :3], tf_before[link][:3, :3], atol=1e-3), '%s did not move' % link
+        for link in STILL:
+            assert np.allclose(tf(link), tf_before[link], atol=1e-6), '%s moved' % link
+        rospy.signal_shutdown('test done')
