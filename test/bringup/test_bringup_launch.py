@@ -8,7 +8,7 @@ roslaunch itself (the command line and its XmlLoader), with no master.
 """
 import os
 import subprocess
-import xml.dom.minidom
+from xml.etree import ElementTree
 
 import numpy as np
 import pytest
@@ -213,11 +213,10 @@ def test_sim_replaces_the_devices_under_the_same_names():
     ('ur3_ft_gripper_bringup.launch', {'robot_ip', 'ft_serial_id', 'gripper_device'}),
 ])
 def test_every_arg_has_doc_and_the_required_ones_no_default(launch_file, required):
-    root = xml.dom.minidom.parse(os.path.join(LAUNCH, launch_file)).documentElement
-    args = [a for a in root.getElementsByTagName('arg') if a.parentNode is root]
+    args = ElementTree.parse(os.path.join(LAUNCH, launch_file)).getroot().findall('arg')
     for arg in args:
-        assert arg.getAttribute('doc').strip(), arg.toxml()
-    unset = {a.getAttribute('name') for a in args if not a.hasAttribute('default') and not a.hasAttribute('value')}
+        assert arg.get('doc', '').strip(), ElementTree.tostring(arg)
+    unset = {a.get('name') for a in args if 'default' not in a.attrib and 'value' not in a.attrib}
     assert unset == required
 
 
