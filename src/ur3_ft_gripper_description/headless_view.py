@@ -7,6 +7,7 @@ screenshot's 3D view holds the robot.
 """
 import collections
 import os
+import re
 import select
 import signal
 import subprocess
@@ -36,6 +37,14 @@ GRID_TOLERANCE = 4
 
 class ViewError(Exception):
     """The headless view failed; the message is one line naming the problem."""
+
+
+class RvizCrashed(ViewError):
+    """RViz died from a signal before its window showed."""
+
+
+# roslaunch's line for RViz (a required node) having died; a negative exit code is the signal.
+NODE_DIED = re.compile(r'process has died \[pid \d+, exit code (-\d+), cmd \S*/rviz ')
 
 
 def package_path(*parts):
@@ -140,14 +149,36 @@ class HeadlessView(object):
         self.stop()
 
     def open(self):
-        """Start Xvfb and the view launch; wait for RViz's window (and the sliders'); place them."""
-        self._log = open(self.log_path, 'w')
+        """Start Xvfb and the view launch; wait for RViz's window (and the sliders'); place them.
+
+        RViz 1.14 with Mesa's software OpenGL under Xvfb now and then dies from
+        a signal while it creates its GL context (seen about once in fifteen
+        starts); that start is tried once more, and said so. A second crash,
+        or any other failure, is a ViewError.
+        """
+        try:
+            self._open('w')
+        except RvizCrashed as crash:
+            print('[view_screenshot] %s; starting the view once more' % crash, file=sys.stderr)
+            self.stop()
+            self._open('a')
+
+    def _open(self, log_mode):
+        self._log = open(self.log_path, log_mode)
+        log_start = self._log.tell()
         self._start_xvfb()
         self._launch = subprocess.Popen(['roslaunch', PACKAGE, LAUNCH_FILE] + self.launch_args,
                                         stdout=self._log, stderr=subprocess.STDOUT, env=self.env)
         deadline = time.monotonic() + self.settings['windows_timeout']
         while True:
             if self._launch.poll() is not None:
+                self._log.flush()
+                with open(self.log_path) as f:
+                    f.seek(log_start)
+                    died = NODE_DIED.findall(f.read())
+                if died and not self.rviz_window:
+                    raise RvizCrashed('RViz died at start-up (signal %d), see %s'
+                                      % (-int(died[-1]), self.log_path))
                 raise ViewError('roslaunch exited (status %d) before RViz showed up, see %s'
                                 % (self._launch.returncode, self.log_path))
             self.rviz_window = self.rviz_window or self.find_window(RVIZ_WINDOW)
@@ -252,6 +283,7 @@ class HeadlessView(object):
         if self._log is not None:
             self._log.close()
         self._launch = self._xvfb = self._log = None
+        self.rviz_window = self.sliders_window = None
 
 
 def main(argv=None):

@@ -53,6 +53,41 @@ def log_tail(log):
         return ''.join(f.readlines()[-20:])
 
 
+def test_rviz_dying_from_a_signal_at_start_up_is_started_once_more(tmp_path):
+    """RViz with software OpenGL under Xvfb now and then crashes while it starts: one retry, said once."""
+    shot, log = str(tmp_path / 'view.png'), str(tmp_path / 'view.log')
+    view = subprocess.Popen(VIEW_COMMAND + ['--output', shot, '--log', log], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, universal_newlines=True, env=own_master_env())
+    try:
+        deadline = time.monotonic() + TIMEOUT
+        rviz = ''
+        while not rviz and time.monotonic() < deadline:
+            rviz = subprocess.run(['pgrep', '-P', str(launch_pid(view.pid)), '-f', '/rviz '],
+                                  stdout=subprocess.PIPE, universal_newlines=True).stdout.split()
+            time.sleep(0.1)
+        assert rviz, 'RViz did not start'
+        os.kill(int(rviz[0]), 11)  # SIGSEGV, as the crash
+        out, err = view.communicate(timeout=900)
+    finally:
+        if view.poll() is None:
+            view.kill()
+    assert view.returncode == 0, 'view_screenshot failed: %s\n%s' % (err, log_tail(log))
+    assert err.count('RViz died at start-up (signal 11)') == 1, err
+    assert out.strip() == 'screenshot: %s' % shot
+
+
+def launch_pid(view_pid):
+    """The roslaunch that view_screenshot started (its child), once it runs."""
+    deadline = time.monotonic() + TIMEOUT
+    while time.monotonic() < deadline:
+        found = subprocess.run(['pgrep', '-P', str(view_pid), '-f', 'roslaunch'], stdout=subprocess.PIPE,
+                               universal_newlines=True).stdout.split()
+        if found:
+            return int(found[0])
+        time.sleep(0.1)
+    raise AssertionError('view_screenshot started no roslaunch')
+
+
 def test_view_command_saves_a_screenshot_that_shows_the_robot(tmp_path):
     status, out, err, shot, log = run_view(tmp_path)
     assert status == 0, 'view_screenshot failed: %s\n%s' % (err, log_tail(log))
