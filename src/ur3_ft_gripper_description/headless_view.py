@@ -287,8 +287,8 @@ class HeadlessView(object):
 
 
 def main(argv=None):
-    from .model.cli import _OneLineParser
-    parser = _OneLineParser(
+    from .model.cli import OneLineParser
+    parser = OneLineParser(
         prog='view_screenshot',
         description='Run the view launch under Xvfb (no display needed), move the joint sliders '
                     'beside RViz, and save a screenshot once the robot shows. Prints '

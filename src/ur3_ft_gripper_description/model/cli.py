@@ -62,7 +62,7 @@ def expand_description_main(argv=None):
     return 0
 
 
-class _OneLineParser(argparse.ArgumentParser):
+class OneLineParser(argparse.ArgumentParser):
     """argparse, but a usage error is one line and exit status 1, like every other error here."""
 
     def error(self, message):
@@ -80,7 +80,7 @@ def _installed_ur_types():
 
 def export_urdf_main(argv=None):
     from . import export
-    parser = _OneLineParser(
+    parser = OneLineParser(
         prog='export_urdf',
         description='Write a flattened URDF of a UR arm + Robotiq FT 300 + 2F-140 (either part '
                     'optional) for simulators and libraries that do not read xacro or ROS '
