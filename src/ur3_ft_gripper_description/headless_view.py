@@ -156,17 +156,19 @@ class HeadlessView(object):
         starts); that start is tried once more, and said so. A second crash,
         or any other failure, is a ViewError.
         """
+        self._log = open(self.log_path, 'w')
+        self._start_xvfb()
         try:
-            self._open('w')
+            self._open()
         except RvizCrashed as crash:
             print('[view_screenshot] %s; starting the view once more' % crash, file=sys.stderr)
-            self.stop()
-            self._open('a')
+            self._stop_launch()  # the same Xvfb serves the second start
+            self.rviz_window = self.sliders_window = None
+            self._open()
 
-    def _open(self, log_mode):
-        self._log = open(self.log_path, log_mode)
+    def _open(self):
+        self._log.flush()
         log_start = self._log.tell()
-        self._start_xvfb()
         self._launch = subprocess.Popen(['roslaunch', PACKAGE, LAUNCH_FILE] + self.launch_args,
                                         stdout=self._log, stderr=subprocess.STDOUT, env=self.env)
         deadline = time.monotonic() + self.settings['windows_timeout']
@@ -265,14 +267,7 @@ class HeadlessView(object):
 
     def stop(self):
         """SIGINT to roslaunch (it stops its nodes and the master it started), then Xvfb."""
-        if self._launch is not None and self._launch.poll() is None:
-            self._launch.send_signal(signal.SIGINT)
-            try:
-                # roslaunch gives each node 15 s after SIGINT, then SIGTERM.
-                self._launch.wait(40)
-            except subprocess.TimeoutExpired:
-                self._launch.kill()
-                self._launch.wait()
+        self._stop_launch()
         if self._xvfb is not None and self._xvfb.poll() is None:
             self._xvfb.terminate()
             try:
@@ -283,7 +278,17 @@ class HeadlessView(object):
         if self._log is not None:
             self._log.close()
         self._launch = self._xvfb = self._log = None
-        self.rviz_window = self.sliders_window = None
+
+    def _stop_launch(self):
+        if self._launch is not None and self._launch.poll() is None:
+            self._launch.send_signal(signal.SIGINT)
+            try:
+                # roslaunch gives each node 15 s after SIGINT, then SIGTERM.
+                self._launch.wait(40)
+            except subprocess.TimeoutExpired:
+                self._launch.kill()
+                self._launch.wait()
+        self._launch = None
 
 
 def main(argv=None):
