@@ -1,0 +1,309 @@
+"""The UR controller box's modes, program, speed slider and IO, and its dashboard server, without ROS.
+
+Robot modes (ur_dashboard_msgs/RobotMode names) go POWER_OFF -> BOOTING ->
+POWER_ON -> IDLE on "power on", IDLE -> RUNNING on "brake release" (which
+powers on first when needed), anything -> POWER_OFF on "power off". The
+transitions take `transition_time` seconds each, much less than the real
+robot's, so that tests and users do not wait for a simulated boot.
+
+The External Control program runs (robot_program_running) when the robot
+is RUNNING and either "play" started a loaded program that holds it, or
+headless mode sent it (resend_robot_program). Powering off, "stop", a
+script sent to script_command, hand_back_control, all end it.
+
+The dashboard answers are the UR dashboard server's (Universal Robots'
+"Dashboard server" manual, e-Series/CB3): the driver's Trigger services
+succeed when the answer matches what it expects.
+"""
+
+import re
+
+# Robot mode names in ur_dashboard_msgs/RobotMode order of start-up.
+POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING = 'POWER_OFF', 'BOOTING', 'POWER_ON', 'IDLE', 'RUNNING'
+SAFETY_NORMAL = 'NORMAL'
+SELECTABLE_MODES = (POWER_OFF, IDLE, RUNNING)
+EXTERNAL_CONTROL = 'external_control.urp'
+
+# Digital outputs: 8 standard (0-7), 8 configurable (8-15), 2 tool (16-17); flags: none
+# reported; analog: 2 standard inputs, 2 tool inputs, 2 standard outputs (ur_msgs/SetIO's pins).
+DIGITAL_PINS = 18
+ANALOG_OUTPUTS = 2
+ANALOG_INPUTS = 4
+TOOL_VOLTAGES = (0, 12, 24)
+
+
+class RobotState(object):
+    """Modes, program, slider, IO, payload; `step(dt)` lets timed transitions happen."""
+
+    def __init__(self, robot_mode=RUNNING, program_running=True, headless=False, e_series=True,
+                 transition_time=0.5, programs=(EXTERNAL_CONTROL,)):
+        self.robot_mode = robot_mode
+        self.safety_mode = SAFETY_NORMAL
+        self.headless = headless
+        self.e_series = e_series
+        self.transition_time = float(transition_time)
+        self.programs = list(programs)
+        self.loaded_program = None if headless else EXTERNAL_CONTROL
+        self.program_state = 'STOPPED'
+        self.external_control_running = False
+        self.speed_slider = 1.0
+        self.digital_out = [False] * DIGITAL_PINS
+        self.digital_in = [False] * DIGITAL_PINS
+        self.analog_out = [0.0] * ANALOG_OUTPUTS
+        self.analog_in = [0.0] * ANALOG_INPUTS
+        self.tool_voltage = 0
+        self.payload = (0.0, (0.0, 0.0, 0.0))
+        self.log = []
+        self.popup = None
+        self._target = None        # robot mode a transition is heading for
+        self._timer = 0.0
+        if program_running and robot_mode == RUNNING:
+            self.program_state = 'PLAYING'
+            self.external_control_running = True
+
+    # -- derived ---------------------------------------------------------------
+
+    @property
+    def program_running(self):
+        """robot_program_running: the External Control node runs, i.e. ROS may command."""
+        return self.external_control_running and self.robot_mode == RUNNING
+
+    def speed_scaling(self):
+        """The slider times 0 or 1 for a running program (a stopped or paused one does not move)."""
+        return self.speed_slider if self.program_running and self.program_state == 'PLAYING' else 0.0
+
+    # -- time ------------------------------------------------------------------
+
+    def step(self, dt):
+        """Advance a pending power-on / brake-release transition by dt seconds."""
+        if self._target is None:
+            return
+        self._timer += dt
+        if self._timer < self.transition_time:
+            return
+        self._timer = 0.0
+        order = [POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING]
+        here = order.index(self.robot_mode)
+        there = order.index(self._target)
+        if here < there:
+            self.robot_mode = order[here + 1]
+        if self.robot_mode == self._target:
+            self._target = None
+
+    def _head_for(self, mode):
+        if self.robot_mode != mode:
+            self._target = mode
+            self._timer = 0.0
+
+    def _end_program(self):
+        self.external_control_running = False
+        self.program_state = 'STOPPED'
+
+    # -- what ROS-side services do directly -----------------------------------
+
+    def set_speed_slider(self, fraction):
+        """ur_msgs/SetSpeedSliderFraction: (success, message); 0..1 only."""
+        if not 0.0 <= fraction <= 1.0:  # also false for NaN
+            return False, 'speed_slider_fraction %r must be within [0, 1]' % fraction
+        self.speed_slider = float(fraction)
+        return True, ''
+
+    def set_io(self, fun, pin, state):
+        """ur_msgs/SetIO: (success, message)."""
+        if fun in (1, 2):  # FUN_SET_DIGITAL_OUT, FUN_SET_FLAG
+            if state not in (0.0, 1.0):
+                return False, 'state %r: digital outputs and flags take 0 or 1' % state
+            if fun == 2:
+                return True, ''  # flags are set on the robot; the driver does not report them back
+            if not 0 <= pin < DIGITAL_PINS:
+                return False, 'pin %d: digital outputs are 0-17 (8-15 configurable, 16-17 tool)' % pin
+            self.digital_out[pin] = state == 1.0
+            return True, ''
+        if fun == 3:  # FUN_SET_ANALOG_OUT
+            if not 0 <= pin < ANALOG_OUTPUTS:
+                return False, 'pin %d: analog outputs are 0 and 1' % pin
+            if not 0.0 <= state <= 1.0:
+                return False, 'state %r: analog outputs take a fraction 0..1 of their range' % state
+            self.analog_out[pin] = float(state)
+            return True, ''
+        if fun == 4:  # FUN_SET_TOOL_VOLTAGE
+            if state not in TOOL_VOLTAGES:
+                return False, 'state %r: the tool voltage is 0, 12 or 24' % state
+            self.tool_voltage = int(state)
+            return True, ''
+        return False, 'fun %d: use FUN_SET_DIGITAL_OUT (1), FUN_SET_FLAG (2), FUN_SET_ANALOG_OUT (3) or ' \
+                      'FUN_SET_TOOL_VOLTAGE (4)' % fun
+
+    def set_payload(self, mass, center_of_gravity):
+        if not mass >= 0.0 or not all(abs(c) < 10.0 for c in center_of_gravity):
+            return False, 'mass %r kg must be >= 0 and the centre of gravity finite' % mass
+        self.payload = (float(mass), tuple(center_of_gravity))
+        return True, ''
+
+    def resend_robot_program(self):
+        """The driver sends its URScript again (headless mode): the External Control program runs."""
+        if not self.headless:
+            return False, 'resend_robot_program works in headless mode only: play the program with ' \
+                          'External Control on the teach pendant (dashboard/play)'
+        if self.robot_mode != RUNNING:
+            return False, 'The robot is %s: it must be RUNNING (set_mode) to run the program' % self.robot_mode
+        self.external_control_running = True
+        self.program_state = 'PLAYING'
+        return True, 'Successfully resent robot program'
+
+    def hand_back_control(self):
+        if not self.program_running:
+            return False, 'The External Control program is not running'
+        self._end_program()
+        return True, 'Deactivated control'
+
+    def script_started(self, secondary):
+        """A URScript program arrived: a primary one replaces the running program."""
+        if not secondary:
+            self._end_program()
+
+    # -- the dashboard server ----------------------------------------------------
+
+    def dashboard(self, command):
+        """The dashboard server's answer to one command line."""
+        command = command.strip()
+        words = command.lower().split()
+        key = ' '.join(words)
+        if key == 'power on':
+            if self.robot_mode == POWER_OFF:
+                self._head_for(IDLE)
+            return 'Powering on'
+        if key == 'power off':
+            self._end_program()
+            self._target = None
+            self.robot_mode = POWER_OFF
+            return 'Powering off'
+        if key == 'brake release':
+            self._head_for(RUNNING)
+            return 'Brake releasing'
+        if key == 'play':
+            if self.robot_mode != RUNNING or self.loaded_program is None:
+                return 'Failed to execute: play'
+            self.program_state = 'PLAYING'
+            self.external_control_running = self.loaded_program == EXTERNAL_CONTROL
+            return 'Starting program'
+        if key == 'stop':
+            if self.program_state == 'STOPPED':
+                return 'Failed to execute: stop'
+            self._end_program()
+            return 'Stopped'
+        if key == 'pause':
+            if self.program_state != 'PLAYING':
+                return 'Failed to execute: pause'
+            self.program_state = 'PAUSED'
+            return 'Pausing program'
+        if key == 'unlock protective stop':
+            if self.safety_mode != 'PROTECTIVE_STOP':
+                return 'Protective stop releasing'
+            self.safety_mode = SAFETY_NORMAL
+            return 'Protective stop releasing'
+        if key == 'restart safety':
+            self.safety_mode = SAFETY_NORMAL
+            self._end_program()
+            self.robot_mode = POWER_OFF
+            return 'Restarting safety'
+        if key == 'close popup':
+            self.popup = None
+            return 'closing popup'
+        if key == 'close safety popup':
+            return 'closing safety popup'
+        if key == 'robotmode':
+            return 'Robotmode: %s' % self.robot_mode
+        if key == 'safetymode':
+            return 'Safetymode: %s' % self.safety_mode
+        if key == 'running':
+            return 'Program running: %s' % ('true' if self.program_state == 'PLAYING' else 'false')
+        if key == 'programstate':
+            return '%s %s' % (self.program_state, self.loaded_program or '<unnamed>')
+        if key == 'get loaded program':
+            return 'Loaded program: %s' % self.loaded_program if self.loaded_program else 'No program loaded'
+        if key == 'isprogramsaved':
+            return 'true %s' % (self.loaded_program or '<unnamed>')
+        if key == 'is in remote control':
+            return 'true' if self.e_series else "could not understand: '%s'" % command
+        if key == 'clear operational mode':
+            return "No longer controlling the operational mode. Current operational mode: 'AUTOMATIC'."
+        if key == 'quit':
+            return 'Disconnected'
+        if key == 'shutdown':
+            self.power_off_quietly()
+            return 'Shutting down'
+        if key == 'polyscopeversion':
+            return 'URSoftware %s' % ('5.12.0' if self.e_series else '3.15.7')
+        if words[:2] == ['load', 'installation']:
+            name = command.split(None, 2)[2] if len(words) > 2 else ''
+            return 'Loading installation: %s' % name if name else 'File not found: '
+        if words[:1] == ['load']:
+            name = command.split(None, 1)[1] if len(words) > 1 else ''
+            if name not in self.programs and name.split('/')[-1] not in self.programs:
+                return 'File not found: %s' % name
+            self._end_program()
+            self.loaded_program = name.split('/')[-1]
+            return 'Loading program: %s' % name
+        if words[:1] == ['addtolog']:
+            message = command[len('addToLog'):].strip()
+            if not message:
+                return 'No log message to add'
+            self.log.append(message)
+            return 'Added log message'
+        if words[:1] == ['popup']:
+            self.popup = command[len('popup'):].strip()
+            return 'showing popup'
+        return "could not understand: '%s'" % command
+
+    def power_off_quietly(self):
+        self._end_program()
+        self._target = None
+        self.robot_mode = POWER_OFF
+
+
+# What ur_robot_driver's dashboard services send, and the answer each expects for success.
+DASHBOARD_TRIGGERS = {
+    'power_on': ('power on', r'Powering on'),
+    'power_off': ('power off', r'Powering off'),
+    'brake_release': ('brake release', r'Brake releasing'),
+    'play': ('play', r'Starting program'),
+    'pause': ('pause', r'Pausing program'),
+    'stop': ('stop', r'Stopped'),
+    'unlock_protective_stop': ('unlock protective stop', r'Protective stop releasing'),
+    'restart_safety': ('restart safety', r'Restarting safety'),
+    'close_popup': ('close popup', r'closing popup'),
+    'close_safety_popup': ('close safety popup', r'closing safety popup'),
+    'shutdown': ('shutdown', r'Shutting down'),
+    'clear_operational_mode': ('clear operational mode', r'No longer controlling the operational mode'),
+}
+
+
+def answer_matches(answer, expected):
+    return re.match(expected, answer) is not None
+
+
+def plan_set_mode(robot_mode, target, stop_program):
+    """The dashboard commands robot_state_helper sends to reach `target`, each with the mode it then waits for.
+
+    Returns a list of (command, robot mode to wait for or None); raises
+    ValueError for a mode that cannot be selected.
+    """
+    if target not in SELECTABLE_MODES:
+        raise ValueError('Requested target mode %s which cannot be explicitly selected: use POWER_OFF, '
+                         'IDLE or RUNNING' % target)
+    steps = []
+    if stop_program:
+        steps.append(('stop', None))
+    if target == POWER_OFF:
+        steps.append(('power off', POWER_OFF))
+    elif target == IDLE:
+        if robot_mode == RUNNING:
+            steps.append(('power off', POWER_OFF))
+        steps.append(('power on', IDLE))
+    else:
+        if robot_mode != RUNNING:
+            if robot_mode not in (IDLE,):
+                steps.append(('power on', IDLE))
+            steps.append(('brake release', RUNNING))
+    return steps
