@@ -1,0 +1,75 @@
+"""The arm's kinematics from the model in robot_description, without ROS.
+
+Forward kinematics is kinematics.Model's chain product over the joints
+between `base` and `tool0`, with the joint origins taken from the model once
+(so the user's calibration, kinematics_config, is in them): the robot's own
+`tool0_controller` is then the same frame as the model's `tool0`, as on a
+calibrated robot. Inverse kinematics, for the Cartesian controllers and
+movej to a pose, is damped least squares on that forward kinematics, from
+the current joint positions (a Cartesian controller follows a path in small
+steps, so it never needs a far jump); a target it cannot reach within the
+tolerance is reported as such rather than approximated.
+"""
+
+import numpy as np
+from transforms3d.axangles import axangle2mat, mat2axangle
+
+from .. import kinematics
+
+
+class ArmKinematics(object):
+    def __init__(self, urdf_text, joints, base='base', tip='tool0'):
+        model = kinematics.Model(urdf_text)
+        self.chain = model.chain(base, tip)
+        self.joints = list(joints)
+        names = [joint.name for joint in self.chain]
+        missing = [j for j in self.joints if j not in names]
+        if missing:
+            raise ValueError('robot_description has no joint(s) %s between %s and %s'
+                             % (', '.join(missing), base, tip))
+        self.index = [self.joints.index(j.name) if j.name in self.joints else None for j in self.chain]
+        self.origins = [kinematics.pose_matrix(j.origin) for j in self.chain]
+        self.axes = [np.asarray(j.axis or (1.0, 0.0, 0.0), dtype=float) for j in self.chain]
+        self.lower = np.array([model.joints[j].limit.lower for j in self.joints], dtype=float)
+        self.upper = np.array([model.joints[j].limit.upper for j in self.joints], dtype=float)
+        self.velocity = np.array([model.joints[j].limit.velocity for j in self.joints], dtype=float)
+
+    def forward(self, positions):
+        """4x4 pose of the tip in the base for joint positions in `joints` order."""
+        t = np.eye(4)
+        for origin, axis, index in zip(self.origins, self.axes, self.index):
+            t = t.dot(origin)
+            if index is not None:
+                motion = np.eye(4)
+                motion[:3, :3] = axangle2mat(axis, positions[index])
+                t = t.dot(motion)
+        return t
+
+    def jacobian(self, positions, step=1e-6):
+        """6xN numerical Jacobian (linear; angular as rotation vectors in the base)."""
+        base = self.forward(positions)
+        columns = []
+        for j in range(len(self.joints)):
+            moved = np.array(positions, dtype=float)
+            moved[j] += step
+            columns.append(pose_error(self.forward(moved), base) / step)
+        return np.array(columns).T
+
+    def inverse(self, target, seed, tolerance=1e-5, iterations=100, damping=1e-3):
+        """Joint positions reaching the 4x4 `target` from `seed`, or None if not within tolerance."""
+        q = np.array(seed, dtype=float)
+        for _ in range(iterations):
+            error = pose_error(target, self.forward(q))
+            if np.linalg.norm(error) < tolerance:
+                return q
+            jac = self.jacobian(q)
+            step = jac.T.dot(np.linalg.solve(jac.dot(jac.T) + damping ** 2 * np.eye(6), error))
+            q = np.clip(q + step, self.lower, self.upper)
+        return q if np.linalg.norm(pose_error(target, self.forward(q))) < tolerance else None
+
+
+def pose_error(target, current):
+    """6-vector from `current` to `target`: translation, then rotation vector (base frame)."""
+    rotation = target[:3, :3].dot(current[:3, :3].T)
+    axis, angle = mat2axangle(rotation, unit_thresh=1e-5)
+    return np.concatenate([target[:3, 3] - current[:3, 3], np.asarray(axis) * angle])
