@@ -14,13 +14,18 @@ tolerance is reported as such rather than approximated.
 import numpy as np
 from transforms3d.axangles import axangle2mat, mat2axangle
 
-from .. import kinematics
+from ur3_ft_gripper_description import kinematics
 
 
 class ArmKinematics(object):
     def __init__(self, urdf_text, joints, base='base', tip='tool0'):
         model = kinematics.Model(urdf_text)
-        self.chain = model.chain(base, tip)
+        root = model.root()
+        if root is None or base not in model.links or tip not in model.links:
+            raise ValueError('robot_description must be one tree holding %s and %s' % (base, tip))
+        # ur_description's `base` hangs from base_link beside the arm, not above it.
+        self.base_inverse = np.linalg.inv(model.chain_transform(model.chain(root, base)))
+        self.chain = model.chain(root, tip)
         self.joints = list(joints)
         names = [joint.name for joint in self.chain]
         missing = [j for j in self.joints if j not in names]
@@ -36,7 +41,7 @@ class ArmKinematics(object):
 
     def forward(self, positions):
         """4x4 pose of the tip in the base for joint positions in `joints` order."""
-        t = np.eye(4)
+        t = self.base_inverse
         for origin, axis, index in zip(self.origins, self.axes, self.index):
             t = t.dot(origin)
             if index is not None:
