@@ -198,11 +198,23 @@ def test_sim_replaces_the_devices_under_the_same_names():
         '/robotiq_ft_sensor': (PACKAGE, 'ft300_sim'),
         '/robotiq2FGripper': (PACKAGE, 'gripper_sim'),
         '/gripper_joint_states': (PACKAGE, 'gripper_joint_states'),
-        '/arm_joint_state_publisher': ('joint_state_publisher', 'joint_state_publisher'),
+        '/ur_hardware_interface': (PACKAGE, 'ur_arm_sim'),
         '/robot_state_publisher': ('robot_state_publisher', 'robot_state_publisher'),
     }
     assert_joint_states_meet(nodes)
-    # The arm's joint_state_publisher knows the arm only, so it never publishes finger_joint.
+    # ur_robot_driver's own controller configuration for ur_type, on the parameter server as
+    # its ur_control.launch puts it, and read by the simulation.
+    config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', 'ur3_controllers.yaml')
+    assert params['/ur_hardware_interface/controller_config_file'] == config
+    assert params['/scaled_pos_joint_traj_controller/type'] == 'position_controllers/ScaledJointTrajectoryController'
+    assert params['/hardware_control_loop/loop_hz'] == 125
+
+
+def test_sim_gui_gives_sliders_instead_of_the_driver():
+    nodes, params = load_nodes('ur3_ft_gripper_bringup.launch', 'sim:=true', 'gui:=true')
+    assert '/ur_hardware_interface' not in nodes
+    assert kinds(nodes)['/arm_joint_state_publisher'] == ('joint_state_publisher_gui', 'joint_state_publisher_gui')
+    # The sliders know the arm only, so they never publish finger_joint.
     arm = kinematics.Model(params['/arm_joint_state_publisher/robot_description'])
     assert 'finger_joint' not in arm.joints and 'wrist_3_joint' in arm.joints
     assert 'finger_joint' in kinematics.Model(params['/robot_description']).joints
@@ -256,16 +268,18 @@ def without_ur_robot_driver(folder):
     return env
 
 
-def test_sim_needs_no_ur_robot_driver_and_real_says_it_is_missing(tmp_path):
+def test_without_ur_robot_driver_only_the_sliders_run_and_the_rest_says_it_is_missing(tmp_path):
+    # The simulated arm reads ur_robot_driver's controller configuration; the sliders need nothing of it.
     env = without_ur_robot_driver(tmp_path)
     # By path: the linked package and the workspace's source space would both match a package name.
     launch_file = os.path.join(LAUNCH, 'ur3_ft_gripper_bringup.launch')
-    sim = subprocess.run(['roslaunch', '--nodes', launch_file, 'sim:=true'],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, env=env,
-                         timeout=180)
-    assert sim.returncode == 0, sim.stderr
-    assert '/robotiq2FGripper' in sim.stdout.split()
-    real = roslaunch_run(launch_file, 'gripper_device:=/dev/ttyUSB1', *REAL_ARGS, env=env)
-    assert real.returncode == 1
-    assert 'ur_robot_driver' in real.stderr and 'not found' in real.stderr.lower(), real.stderr
-    assert 'Traceback' not in real.stderr + real.stdout
+    sliders = subprocess.run(['roslaunch', '--nodes', launch_file, 'sim:=true', 'gui:=true'],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True, env=env,
+                             timeout=180)
+    assert sliders.returncode == 0, sliders.stderr
+    assert '/robotiq2FGripper' in sliders.stdout.split()
+    for args in (['sim:=true'], ['gripper_device:=/dev/ttyUSB1'] + REAL_ARGS):
+        run = roslaunch_run(launch_file, *args, env=env)
+        assert run.returncode == 1
+        assert 'ur_robot_driver' in run.stderr and 'not found' in run.stderr.lower(), run.stderr
+        assert 'Traceback' not in run.stderr + run.stdout

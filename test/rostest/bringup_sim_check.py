@@ -99,7 +99,7 @@ class BringupSimTest(unittest.TestCase):
         state = rosgraph.Master(rospy.get_name()).getSystemState()
         publishers = dict((topic, set(nodes)) for topic, nodes in state[0])
         subscribers = dict((topic, set(nodes)) for topic, nodes in state[1])
-        self.assertEqual(publishers.get('/joint_states'), {'/arm_joint_state_publisher', '/gripper_joint_states'})
+        self.assertEqual(publishers.get('/joint_states'), {'/ur_hardware_interface', '/gripper_joint_states'})
         self.assertIn('/robot_state_publisher', subscribers.get('/joint_states', set()))
         arm = set(self.prefix + j for j in ARM_JOINTS)
         finger = {self.prefix + 'finger_joint'}
@@ -113,10 +113,14 @@ class BringupSimTest(unittest.TestCase):
         for names in seen:
             self.assertIn(names, (arm, finger), 'a message mixes or misses joints: %s' % sorted(names))
 
-    def test_arm_from_joint_state_publisher_in_tf(self):
+    def test_arm_from_the_simulated_driver_in_tf(self):
+        arm = set(self.prefix + j for j in ARM_JOINTS)
+        state = wait_until(lambda: (lambda m: m if set(m.name) == arm else None)(
+            rospy.wait_for_message('joint_states', JointState, TIMEOUT)), 'an arm message on joint_states')
         msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'tool0', rospy.Time(0),
                                            rospy.Duration(TIMEOUT))
-        expected = self.model.transform(self.prefix + 'base_link', self.prefix + 'tool0')
+        expected = self.model.transform(self.prefix + 'base_link', self.prefix + 'tool0',
+                                        dict(zip(state.name, state.position)))
         np.testing.assert_allclose(rostest_helpers.transform_matrix(msg.transform), expected, atol=1e-6)
 
     def test_simulated_sensor_under_the_real_name(self):
