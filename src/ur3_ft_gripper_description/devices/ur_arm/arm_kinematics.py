@@ -41,24 +41,27 @@ class ArmKinematics(object):
 
     def forward(self, positions):
         """4x4 pose of the tip in the base for joint positions in `joints` order."""
+        return self._chain(positions)[0]
+
+    def _chain(self, positions):
+        """The tip's pose, and each actuated joint's axis and origin in the base (controller order)."""
         t = self.base_inverse
+        axes, points = [None] * len(self.joints), [None] * len(self.joints)
         for origin, axis, index in zip(self.origins, self.axes, self.index):
             t = t.dot(origin)
             if index is not None:
+                axes[index] = t[:3, :3].dot(axis)
+                points[index] = t[:3, 3].copy()
                 motion = np.eye(4)
                 motion[:3, :3] = axangle2mat(axis, positions[index])
                 t = t.dot(motion)
-        return t
+        return t, axes, points
 
-    def jacobian(self, positions, step=1e-6):
-        """6xN numerical Jacobian (linear; angular as rotation vectors in the base)."""
-        base = self.forward(positions)
-        columns = []
-        for j in range(len(self.joints)):
-            moved = np.array(positions, dtype=float)
-            moved[j] += step
-            columns.append(pose_error(self.forward(moved), base) / step)
-        return np.array(columns).T
+    def jacobian(self, positions):
+        """6xN geometric Jacobian of the tip in the base frame (revolute joints): linear, then angular."""
+        tip, axes, points = self._chain(positions)
+        linear = [np.cross(axis, tip[:3, 3] - point) for axis, point in zip(axes, points)]
+        return np.vstack([np.array(linear).T, np.array(axes).T])
 
     def inverse(self, target, seed, tolerance=1e-5, iterations=100, damping=1e-3):
         """Joint positions reaching the 4x4 `target` from `seed`, or None if not within tolerance."""
@@ -73,8 +76,19 @@ class ArmKinematics(object):
         return q if np.linalg.norm(pose_error(target, self.forward(q))) < tolerance else None
 
 
+def rotation_vector(rotation):
+    """Rotation vector of a rotation matrix (the log map), exact for small angles too."""
+    v = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0], rotation[1, 0] - rotation[0, 1]])
+    sine = np.linalg.norm(v) / 2.0
+    angle = np.arctan2(sine, (np.trace(rotation) - 1.0) / 2.0)
+    if sine < 1e-9:
+        if angle < 1.0:
+            return v / 2.0
+        axis, angle = mat2axangle(rotation)  # half a turn: the axis from the matrix itself
+        return np.asarray(axis) * angle
+    return v * angle / (2.0 * sine)
+
+
 def pose_error(target, current):
     """6-vector from `current` to `target`: translation, then rotation vector (base frame)."""
-    rotation = target[:3, :3].dot(current[:3, :3].T)
-    axis, angle = mat2axangle(rotation, unit_thresh=1e-5)
-    return np.concatenate([target[:3, 3] - current[:3, 3], np.asarray(axis) * angle])
+    return np.concatenate([target[:3, 3] - current[:3, 3], rotation_vector(target[:3, :3].dot(current[:3, :3].T))])

@@ -105,7 +105,8 @@ class ArmSim(object):
             self.arm = ArmKinematics(description, self.joints, self.prefix + 'base', self.prefix + 'tool0')
         except (ValueError, KeyError) as exc:
             raise sim_params.ParamError('robot_description: %s' % exc)
-        initial = get_param('~initial_positions', [0.0, -math.pi / 2, 0.0, -math.pi / 2, 0.0, 0.0])
+        # Elbow bent, tool pointing down: away from the singularities of the stretched arm.
+        initial = get_param('~initial_positions', [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0])
         if len(initial) != 6 or not all(math.isfinite(float(v)) for v in initial):
             raise sim_params.ParamError('~initial_positions=%r must be six finite numbers (rad)' % (initial,))
         self.q = np.clip(np.array(initial, dtype=float), self.arm.lower, self.arm.upper)

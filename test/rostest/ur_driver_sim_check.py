@@ -1,0 +1,458 @@
+#!/usr/bin/env python3
+"""rostest node: the simulated arm through ur_robot_driver's documented interface (ur_driver_sim*.test).
+
+Written from ur_robot_driver's doc/ROS_INTERFACE.md and controllers.md: the
+names, types and result codes below are the documented ones; nothing here
+knows how the simulation is built. ~suite: 'full' (everything) or
+'trajectories' (the joint trajectory tests only, e.g. for ur3).
+"""
+import math
+import time
+import unittest
+
+import actionlib
+import numpy as np
+import rospy
+import rostest
+import tf2_ros
+from cartesian_control_msgs.msg import (CartesianTrajectoryPoint, FollowCartesianTrajectoryAction,
+                                        FollowCartesianTrajectoryGoal, FollowCartesianTrajectoryResult)
+from control_msgs.msg import (FollowJointTrajectoryAction, FollowJointTrajectoryGoal,
+                              FollowJointTrajectoryResult, JointTrajectoryControllerState)
+from controller_manager_msgs.srv import ListControllers, SwitchController, SwitchControllerRequest
+from geometry_msgs.msg import Twist, WrenchStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool, Float64, Float64MultiArray, String
+from std_srvs.srv import Trigger
+from trajectory_msgs.msg import JointTrajectoryPoint
+from transforms3d.quaternions import mat2quat
+from ur_dashboard_msgs.msg import RobotMode, SetModeAction, SetModeGoal
+from ur_dashboard_msgs.srv import GetRobotMode
+from ur_msgs.msg import IOStates
+from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSliderFraction
+
+import rostest_helpers
+from rostest_helpers import TIMEOUT
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices import sim_params, wrench_model
+from ur3_ft_gripper_description.model import description
+
+JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
+          'wrist_3_joint']
+# A pose away from singularities (elbow bent, tool down), and one a little off it.
+HOME = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
+AWAY = [0.4, -1.3, 1.2, -1.2, -1.2, 0.6]
+COMMANDING = ['scaled_pos_joint_traj_controller', 'pos_joint_traj_controller', 'scaled_vel_joint_traj_controller',
+              'vel_joint_traj_controller', 'joint_group_vel_controller', 'forward_joint_traj_controller',
+              'forward_cartesian_traj_controller', 'twist_controller', 'pose_based_cartesian_traj_controller',
+              'joint_based_cartesian_traj_controller']
+# The default constraints' goal tolerance (config/<ur_type>_controllers.yaml: goal 0.1 rad).
+GOAL_TOLERANCE = 0.1
+HW = '/ur_hardware_interface/'
+
+
+def wait_until(check, what, timeout=TIMEOUT):
+    end = time.monotonic() + timeout
+    value = None
+    while time.monotonic() < end:
+        value = check()
+        if value:
+            return value
+        time.sleep(0.02)
+    raise AssertionError('%s: not within %g s (last: %r)' % (what, timeout, value))
+
+
+class UrDriver(object):
+    """Clients of the documented interface, made once."""
+
+    def __init__(self):
+        self.set_mode = actionlib.SimpleActionClient(HW + 'set_mode', SetModeAction)
+        self.trajectory = {name: actionlib.SimpleActionClient(name + '/follow_joint_trajectory',
+                                                              FollowJointTrajectoryAction)
+                           for name in ('scaled_pos_joint_traj_controller', 'pos_joint_traj_controller',
+                                        'forward_joint_traj_controller')}
+        self.cartesian = {name: actionlib.SimpleActionClient(name + '/follow_cartesian_trajectory',
+                                                             FollowCartesianTrajectoryAction)
+                          for name in ('pose_based_cartesian_traj_controller', 'joint_based_cartesian_traj_controller',
+                                       'forward_cartesian_traj_controller')}
+        for client in [self.set_mode] + list(self.trajectory.values()) + list(self.cartesian.values()):
+            assert client.wait_for_server(rospy.Duration(TIMEOUT)), 'no action server %s' % client.action_client.ns
+        services = dict(list_controllers=('controller_manager/list_controllers', ListControllers),
+                        switch=('controller_manager/switch_controller', SwitchController),
+                        set_io=(HW + 'set_io', SetIO), slider=(HW + 'set_speed_slider', SetSpeedSliderFraction),
+                        resend=(HW + 'resend_robot_program', Trigger),
+                        power_off=(HW + 'dashboard/power_off', Trigger), play=(HW + 'dashboard/play', Trigger),
+                        get_robot_mode=(HW + 'dashboard/get_robot_mode', GetRobotMode),
+                        version=(HW + 'get_robot_software_version', GetRobotSoftwareVersion))
+        for key, (name, kind) in services.items():
+            rospy.wait_for_service(name, TIMEOUT)
+            setattr(self, key, rospy.ServiceProxy(name, kind))
+        self.script = rospy.Publisher(HW + 'script_command', String, queue_size=1)
+        self.twist = rospy.Publisher('twist_controller/command', Twist, queue_size=1)
+        self.velocity = rospy.Publisher('joint_group_vel_controller/command', Float64MultiArray, queue_size=1)
+
+    def controller_states(self):
+        return {c.name: c.state for c in self.list_controllers().controller}
+
+    def only(self, controller):
+        """Make `controller` the one commanding controller, as ur_robot_driver's integration test switches."""
+        request = SwitchControllerRequest(start_controllers=[controller],
+                                          stop_controllers=[c for c in COMMANDING if c != controller],
+                                          strictness=SwitchControllerRequest.BEST_EFFORT)
+        assert self.switch(request).ok
+        assert self.controller_states()[controller] == 'running'
+
+
+def joint_goal(names, points):
+    goal = FollowJointTrajectoryGoal()
+    goal.trajectory.joint_names = list(names)
+    for seconds, positions in points:
+        goal.trajectory.points.append(JointTrajectoryPoint(positions=list(positions),
+                                                           time_from_start=rospy.Duration(seconds)))
+    return goal
+
+
+def arm_positions(prefix=''):
+    names = [prefix + j for j in JOINTS]
+
+    def arm_message():
+        msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)
+        return msg if set(msg.name) == set(names) else None
+    msg = wait_until(arm_message, 'an arm message on joint_states')
+    return np.array([msg.position[msg.name.index(n)] for n in names]), msg
+
+
+class DriverTestBase(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        cls.driver = UrDriver()
+        cls.prefix = rospy.get_param('~prefix', '')
+        cls.buffer = tf2_ros.Buffer()
+        cls.listener = tf2_ros.TransformListener(cls.buffer)
+
+    def setUp(self):
+        # Every test starts from a running robot with its program running.
+        goal = SetModeGoal(target_robot_mode=RobotMode(mode=RobotMode.RUNNING), play_program=True)
+        self.driver.set_mode.send_goal(goal)
+        self.assertTrue(self.driver.set_mode.wait_for_result(rospy.Duration(TIMEOUT)))
+        self.assertTrue(self.driver.set_mode.get_result().success, self.driver.set_mode.get_result().message)
+        self.assertTrue(self.driver.slider(1.0).success)
+        self.driver.only('scaled_pos_joint_traj_controller')
+
+    def run_goal(self, goal, controller='scaled_pos_joint_traj_controller', timeout=TIMEOUT):
+        client = self.driver.trajectory.get(controller) or self.driver.cartesian[controller]
+        client.send_goal(goal)
+        self.assertTrue(client.wait_for_result(rospy.Duration(timeout)), 'no result from %s' % controller)
+        return client.get_state(), client.get_result()
+
+    def move_to(self, positions, seconds=2.0, controller='scaled_pos_joint_traj_controller'):
+        state, result = self.run_goal(joint_goal(JOINTS, [(seconds, positions)]), controller)
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.SUCCESSFUL, result.error_string)
+
+    def assert_at(self, positions, tolerance=GOAL_TOLERANCE):
+        actual, _ = arm_positions(self.prefix)
+        np.testing.assert_allclose(actual, positions, atol=tolerance)
+
+    def tool(self, frame='tool0_controller'):
+        return rostest_helpers.lookup(self.buffer, self.prefix + 'base', self.prefix + frame)
+
+
+class JointTrajectoryTest(DriverTestBase):
+    """The scaled and unscaled position controllers (run for every ur_type)."""
+
+    def test_scaled_trajectory_succeeds_in_any_joint_order(self):
+        # As ur_robot_driver's integration test orders them: elbow first.
+        names = ['elbow_joint', 'shoulder_lift_joint', 'shoulder_pan_joint', 'wrist_1_joint', 'wrist_2_joint',
+                 'wrist_3_joint']
+        order = [JOINTS.index(n) for n in names]
+        points = [(1.0, [HOME[i] for i in order]), (2.5, [AWAY[i] for i in order]), (4.0, [HOME[i] for i in order])]
+        state, result = self.run_goal(joint_goal(names, points))
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.SUCCESSFUL, result.error_string)
+        self.assertEqual(state, actionlib.GoalStatus.SUCCEEDED)
+        self.assert_at(HOME)
+
+    def test_unscaled_controller_succeeds(self):
+        self.driver.only('pos_joint_traj_controller')
+        self.move_to(AWAY, controller='pos_joint_traj_controller')
+        self.assert_at(AWAY)
+
+    def test_illegal_joint_name_is_invalid_joints(self):
+        names = JOINTS[:5] + ['wrist_4_joint']
+        state, result = self.run_goal(joint_goal(names, [(2.0, HOME)]))
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.INVALID_JOINTS)
+        self.assertEqual(state, actionlib.GoalStatus.REJECTED)
+
+    def test_bad_trajectories_are_invalid_goal(self):
+        beyond = list(HOME)
+        beyond[0] = 7.0  # the model's limits are +-2 pi
+        for what, points in (('non-increasing times', [(6.0, HOME), (3.0, AWAY)]),
+                             ('NaN position', [(2.0, [float('nan')] + HOME[1:])]),
+                             ('beyond the joint limits', [(2.0, beyond)])):
+            state, result = self.run_goal(joint_goal(JOINTS, points))
+            self.assertEqual(result.error_code, FollowJointTrajectoryResult.INVALID_GOAL, what)
+            self.assertEqual(state, actionlib.GoalStatus.REJECTED, what)
+            self.assertTrue(result.error_string, what)
+
+    def test_speed_slider_slows_the_scaled_trajectory(self):
+        self.move_to(HOME)
+        self.assertTrue(self.driver.slider(0.5).success)
+        self.assertFalse(self.driver.slider(1.5).success)
+        wait_until(lambda: abs(rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data - 0.5) < 1e-6,
+                   'speed_scaling_factor 0.5')
+        start = time.monotonic()
+        self.move_to(AWAY, seconds=1.0)
+        self.assertGreater(time.monotonic() - start, 1.8)  # half speed: twice the time (and then some)
+
+    def test_over_fast_trajectory_is_slowed_to_the_joint_velocity_limits(self):
+        self.move_to(HOME)
+        far = list(HOME)
+        far[0] = HOME[0] + 3.0  # 3 rad in 0.2 s: far above any UR joint's velocity limit
+        recorder = rostest_helpers.Recorder('joint_states', JointState)
+        start = time.monotonic()
+        self.move_to(far, seconds=0.2)
+        limit = rospy.get_param('robot_description')
+        model = kinematics.Model(limit)
+        vmax = model.joints[self.prefix + 'shoulder_pan_joint'].limit.velocity
+        speeds = [abs(m.velocity[m.name.index(self.prefix + 'shoulder_pan_joint')])
+                  for m in recorder.since(start) if self.prefix + 'shoulder_pan_joint' in m.name]
+        self.assertTrue(speeds)
+        self.assertLessEqual(max(speeds), vmax * 1.001)
+        self.assertGreater(time.monotonic() - start, 3.0 / vmax)
+        self.assert_at(far)
+
+    def test_new_goal_preempts_and_cancel_stops(self):
+        self.move_to(HOME)
+        client = self.driver.trajectory['scaled_pos_joint_traj_controller']
+        client.send_goal(joint_goal(JOINTS, [(4.0, AWAY)]))
+        time.sleep(1.0)
+        second = actionlib.SimpleActionClient('scaled_pos_joint_traj_controller/follow_joint_trajectory',
+                                              FollowJointTrajectoryAction)
+        second.wait_for_server(rospy.Duration(TIMEOUT))
+        second.send_goal(joint_goal(JOINTS, [(4.0, HOME)]))
+        self.assertTrue(client.wait_for_result(rospy.Duration(TIMEOUT)))
+        self.assertEqual(client.get_state(), actionlib.GoalStatus.PREEMPTED)
+        time.sleep(0.5)
+        second.cancel_goal()
+        self.assertTrue(second.wait_for_result(rospy.Duration(TIMEOUT)))
+        self.assertEqual(second.get_state(), actionlib.GoalStatus.PREEMPTED)
+        time.sleep(0.7)  # stop_trajectory_duration is 0.5 s
+        before, _ = arm_positions(self.prefix)
+        time.sleep(0.5)
+        after, _ = arm_positions(self.prefix)
+        np.testing.assert_allclose(after, before, atol=1e-6)
+
+    def test_state_topic_reports_desired_and_actual(self):
+        msg = rospy.wait_for_message('scaled_pos_joint_traj_controller/state', JointTrajectoryControllerState,
+                                     TIMEOUT)
+        self.assertEqual(list(msg.joint_names), [self.prefix + j for j in JOINTS])
+        self.assertEqual(len(msg.actual.positions), 6)
+
+
+class RobotTest(DriverTestBase):
+    """Modes, program, IO, script, controllers, state (the full suite)."""
+
+    def test_power_off_refuses_commands_and_set_mode_brings_it_back(self):
+        self.assertEqual(self.driver.power_off().message, 'Powering off')
+        wait_until(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
+                   'robot_program_running false')
+        mode = rospy.wait_for_message(HW + 'robot_mode', RobotMode, TIMEOUT)
+        self.assertEqual(mode.mode, RobotMode.POWER_OFF)
+        state, result = self.run_goal(joint_goal(JOINTS, [(2.0, HOME)]))
+        self.assertEqual(state, actionlib.GoalStatus.REJECTED)
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.INVALID_GOAL)
+        self.assertEqual(self.driver.play().success, False)
+        goal = SetModeGoal(target_robot_mode=RobotMode(mode=RobotMode.RUNNING), play_program=True)
+        self.driver.set_mode.send_goal(goal)
+        self.assertTrue(self.driver.set_mode.wait_for_result(rospy.Duration(TIMEOUT)))
+        self.assertTrue(self.driver.set_mode.get_result().success)
+        self.assertEqual(self.driver.get_robot_mode().robot_mode.mode, RobotMode.RUNNING)
+        self.assertTrue(rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data)
+        wait_until(lambda: self.driver.controller_states()['scaled_pos_joint_traj_controller'] == 'running',
+                   'the controller_stopper starts the controller again')
+        self.move_to(HOME)
+
+    def test_switch_controllers_strict_and_best_effort(self):
+        states = self.driver.controller_states()
+        for name in COMMANDING:
+            self.assertIn(name, states)
+        strict = SwitchControllerRequest.STRICT
+        unknown = SwitchControllerRequest(start_controllers=['no_such_controller'],
+                                          stop_controllers=['scaled_pos_joint_traj_controller'], strictness=strict)
+        self.assertFalse(self.driver.switch(unknown).ok)
+        self.assertEqual(self.driver.controller_states(), states)
+        # Two commanding controllers never run together.
+        both = SwitchControllerRequest(start_controllers=['pos_joint_traj_controller'], strictness=strict)
+        self.assertFalse(self.driver.switch(both).ok)
+        swap = SwitchControllerRequest(start_controllers=['pos_joint_traj_controller'],
+                                       stop_controllers=['scaled_pos_joint_traj_controller'], strictness=strict)
+        self.assertTrue(self.driver.switch(swap).ok)
+        states = self.driver.controller_states()
+        self.assertEqual(states['pos_joint_traj_controller'], 'running')
+        self.assertEqual(states['scaled_pos_joint_traj_controller'], 'stopped')
+        state, result = self.run_goal(joint_goal(JOINTS, [(2.0, HOME)]))
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.INVALID_GOAL)  # stopped: refused
+        best = SwitchControllerRequest(start_controllers=['scaled_pos_joint_traj_controller', 'no_such_controller'],
+                                       stop_controllers=['pos_joint_traj_controller', 'twist_controller'],
+                                       strictness=SwitchControllerRequest.BEST_EFFORT)
+        self.assertTrue(self.driver.switch(best).ok)
+        self.assertEqual(self.driver.controller_states()['scaled_pos_joint_traj_controller'], 'running')
+
+    def test_set_io_shows_in_io_states(self):
+        for state in (1.0, 0.0):
+            response = self.driver.set_io(SetIORequest(fun=SetIORequest.FUN_SET_DIGITAL_OUT,
+                                                       pin=SetIORequest.PIN_DOUT3, state=state))
+            self.assertTrue(response.success)
+            wait_until(lambda: rospy.wait_for_message(HW + 'io_states', IOStates, TIMEOUT)
+                       .digital_out_states[3].state == bool(state), 'digital out 3 = %g' % state)
+        self.assertFalse(self.driver.set_io(SetIORequest(fun=SetIORequest.FUN_SET_DIGITAL_OUT, pin=40,
+                                                         state=1.0)).success)
+
+    def test_movej_through_script_command_then_resend_robot_program(self):
+        self.move_to(HOME)
+        rostest_helpers.wait_for_subscribers(self.driver.script)
+        self.driver.script.publish(String(data='movej([%s], a=1.4, v=1.05)' % ', '.join('%g' % v for v in AWAY)))
+        wait_until(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
+                   'the script replaces the External Control program')
+        wait_until(lambda: np.allclose(arm_positions(self.prefix)[0], AWAY, atol=1e-3), 'movej reaches its target')
+        self.assertEqual(self.driver.controller_states()['scaled_pos_joint_traj_controller'], 'stopped')
+        response = self.driver.resend()
+        self.assertTrue(response.success, response.message)
+        wait_until(lambda: rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
+                   'robot_program_running after resend_robot_program')
+        wait_until(lambda: self.driver.controller_states()['scaled_pos_joint_traj_controller'] == 'running',
+                   'the controller runs again')
+        self.move_to(HOME)
+
+    def test_state_topics(self):
+        version = self.driver.version()
+        self.assertGreaterEqual(version.major, 3)
+        msg = rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT)
+        self.assertAlmostEqual(msg.data, 1.0)
+        wrench = rospy.wait_for_message('wrench', WrenchStamped, TIMEOUT)
+        self.assertEqual(wrench.header.frame_id, self.prefix + 'tool0_controller')
+        # tool0_controller is the robot's own tool0: the same pose as the model's.
+        np.testing.assert_allclose(self.tool('tool0_controller'), self.tool('tool0'), atol=1e-4)
+
+    def cartesian_goal(self, target, seconds=2.0):
+        goal = FollowCartesianTrajectoryGoal()
+        point = CartesianTrajectoryPoint(time_from_start=rospy.Duration(seconds))
+        point.pose.position.x, point.pose.position.y, point.pose.position.z = target[:3, 3]
+        w, x, y, z = mat2quat(target[:3, :3])
+        point.pose.orientation.w, point.pose.orientation.x = w, x
+        point.pose.orientation.y, point.pose.orientation.z = y, z
+        goal.trajectory.points.append(point)
+        return goal
+
+    def test_cartesian_controllers_reach_their_targets(self):
+        for index, controller in enumerate(('pose_based_cartesian_traj_controller',
+                                            'joint_based_cartesian_traj_controller',
+                                            'forward_cartesian_traj_controller')):
+            self.move_to(HOME)
+            self.driver.only(controller)
+            start = self.tool()
+            target = start.copy()
+            target[:3, 3] += [0.05, -0.03, 0.04 if index % 2 == 0 else -0.04]
+            state, result = self.run_goal(self.cartesian_goal(target), controller)
+            self.assertEqual(result.error_code, FollowCartesianTrajectoryResult.SUCCESSFUL, result.error_string)
+            time.sleep(0.2)
+            np.testing.assert_allclose(self.tool(), target, atol=2e-3, err_msg=controller)
+            self.driver.only('scaled_pos_joint_traj_controller')
+
+    def test_cartesian_goal_out_of_reach_is_invalid_goal(self):
+        self.driver.only('pose_based_cartesian_traj_controller')
+        target = np.eye(4)
+        target[:3, 3] = [5.0, 0.0, 0.5]
+        state, result = self.run_goal(self.cartesian_goal(target), 'pose_based_cartesian_traj_controller')
+        self.assertEqual(result.error_code, FollowCartesianTrajectoryResult.INVALID_GOAL)
+
+    def test_twist_and_joint_group_velocity(self):
+        self.move_to(HOME)
+        self.driver.only('twist_controller')
+        start = self.tool()
+        rostest_helpers.wait_for_subscribers(self.driver.twist)
+        twist = Twist()
+        twist.linear.z = 0.05
+        for _ in range(50):  # 1 s at 50 Hz
+            self.driver.twist.publish(twist)
+            time.sleep(0.02)
+        self.driver.twist.publish(Twist())
+        time.sleep(0.3)
+        moved = self.tool()[:3, 3] - start[:3, 3]
+        self.assertAlmostEqual(moved[2], 0.05, delta=0.012)
+        self.assertLess(np.linalg.norm(moved[:2]), 0.005)
+        self.driver.only('joint_group_vel_controller')
+        before, _ = arm_positions(self.prefix)
+        rostest_helpers.wait_for_subscribers(self.driver.velocity)
+        for _ in range(50):
+            self.driver.velocity.publish(Float64MultiArray(data=[0.1, 0, 0, 0, 0, 0]))
+            time.sleep(0.02)
+        self.driver.velocity.publish(Float64MultiArray(data=[0.0] * 6))
+        time.sleep(0.3)
+        after, _ = arm_positions(self.prefix)
+        self.assertAlmostEqual(after[0] - before[0], 0.1, delta=0.025)
+
+
+class ModelAlongTrajectoryTest(DriverTestBase):
+    """TF of tool0 and the finger pads, and the FT 300's wrench, while the scaled controller moves the arm."""
+
+    def test_tf_and_wrench_follow_the_trajectory(self):
+        self.move_to(HOME)
+        model = kinematics.Model(rospy.get_param('robot_description'))
+        finger = {}
+
+        def finger_message():
+            msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)
+            if self.prefix + 'finger_joint' in msg.name:
+                finger.update(zip(msg.name, msg.position))
+            return finger
+        wait_until(finger_message, 'finger_joint on joint_states')
+        recorder = rostest_helpers.Recorder('joint_states', JointState)
+        client = self.driver.trajectory['scaled_pos_joint_traj_controller']
+        start = time.monotonic()
+        client.send_goal(joint_goal(JOINTS, [(3.0, AWAY)]))
+        frames = ['tool0'] + list(description.PADS)
+        checked = 0
+        while client.get_state() in (actionlib.GoalStatus.PENDING, actionlib.GoalStatus.ACTIVE) and \
+                time.monotonic() - start < TIMEOUT:
+            time.sleep(0.25)
+            arm = [m for m in recorder.since(start) if self.prefix + 'shoulder_pan_joint' in m.name]
+            if len(arm) < 3:
+                continue
+            sample = arm[-3]  # robot_state_publisher has had time to publish it
+            positions = dict(finger, **dict(zip(sample.name, sample.position)))
+            for frame in frames:
+                msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + frame,
+                                                   sample.header.stamp, rospy.Duration(1.0))
+                expected = model.transform(self.prefix + 'base_link', self.prefix + frame, positions)
+                np.testing.assert_allclose(rostest_helpers.transform_matrix(msg.transform), expected, atol=1e-4,
+                                           err_msg='%s at %s' % (frame, sample.position))
+            checked += 1
+        self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
+        self.assertGreaterEqual(checked, 5)
+        # The FT 300 reads the gripper's weight in its own frame: it turns with the sensor.
+        payload = wrench_model.load_payload(sim_params.default_devices_file())
+        readings = []
+        for pose in (HOME, AWAY):
+            self.move_to(pose)
+            time.sleep(0.3)
+            sensor = rostest_helpers.lookup(self.buffer, self.prefix + 'base_link',
+                                            self.prefix + 'robotiq_ft_frame_id')
+            gravity = sensor[:3, :3].T.dot([0.0, 0.0, -1.0])
+            expected = wrench_model.gravity_wrench(gravity[0], gravity[1], gravity[2], payload.mass, payload.com)
+            msgs = [rospy.wait_for_message('robotiq_ft_wrench', WrenchStamped, TIMEOUT) for _ in range(20)]
+            force = np.mean([[m.wrench.force.x, m.wrench.force.y, m.wrench.force.z] for m in msgs], axis=0)
+            np.testing.assert_allclose(force, expected[:3], atol=0.15)
+            readings.append(force)
+        self.assertGreater(np.linalg.norm(readings[0] - readings[1]), 1.0)
+
+
+class FullSuite(JointTrajectoryTest, RobotTest, ModelAlongTrajectoryTest):
+    """Every part of the interface (rostest.rosrun takes one TestCase class)."""
+
+
+if __name__ == '__main__':
+    rospy.init_node('ur_driver_sim_check')
+    suite = rospy.get_param('~suite', 'full')
+    rostest.rosrun('ur3_ft_gripper_description', 'ur_driver_sim_' + suite,
+                   JointTrajectoryTest if suite == 'trajectories' else FullSuite)
