@@ -416,17 +416,26 @@ class ModelAlongTrajectoryTest(DriverTestBase):
         while client.get_state() in (actionlib.GoalStatus.PENDING, actionlib.GoalStatus.ACTIVE) and \
                 time.monotonic() - start < TIMEOUT:
             time.sleep(0.25)
-            arm = [m for m in recorder.since(start) if self.prefix + 'shoulder_pan_joint' in m.name]
-            if len(arm) < 3:
+            # robot_state_publisher turns some of the joint_states messages into TF (at its
+            # publish_frequency) and TF interpolates between them: compare at a time TF has
+            # a sample of the arm, the stamp of its latest tool0, with the message of that stamp.
+            latest = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'tool0', rospy.Time(0))
+            stamp = latest.header.stamp
+            sample = [m for m in recorder.since(start) if m.header.stamp == stamp and
+                      self.prefix + 'shoulder_pan_joint' in m.name]
+            if not sample:
                 continue
-            sample = arm[-3]  # robot_state_publisher has had time to publish it
-            positions = dict(finger, **dict(zip(sample.name, sample.position)))
+            positions = dict(finger, **dict(zip(sample[0].name, sample[0].position)))
+            # One point with positions only: a straight line in joint space from HOME to AWAY.
+            arm = np.array([positions[self.prefix + j] for j in JOINTS])
+            fractions = (arm - HOME) / (np.array(AWAY) - HOME)
+            np.testing.assert_allclose(fractions, fractions[0], atol=1e-6, err_msg='off the trajectory')
             for frame in frames:
-                msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + frame,
-                                                   sample.header.stamp, rospy.Duration(1.0))
+                msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + frame, stamp,
+                                                   rospy.Duration(1.0))
                 expected = model.transform(self.prefix + 'base_link', self.prefix + frame, positions)
-                np.testing.assert_allclose(rostest_helpers.transform_matrix(msg.transform), expected, atol=1e-4,
-                                           err_msg='%s at %s' % (frame, sample.position))
+                np.testing.assert_allclose(rostest_helpers.transform_matrix(msg.transform), expected, atol=1e-6,
+                                           err_msg='%s at %s' % (frame, sample[0].position))
             checked += 1
         self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
         self.assertGreaterEqual(checked, 5)
