@@ -145,6 +145,7 @@ class ArmSim(object):
         self.last_program_running = True
         self.last_modes = None
         self.stopped_by_program = []
+        self.finished = []           # (controller, goal handle, Outcome) to report outside self.lock
 
         # -- the message classes the loop and the callbacks use
         self.msg = dict(JointState=JointState, Float64=Float64, WrenchStamped=WrenchStamped, Bool=Bool,
@@ -348,6 +349,7 @@ class ArmSim(object):
                 for name in after - before:
                     self._controller_started(name)
                 self.stopped_by_program = [n for n in self.stopped_by_program if n not in request.start_controllers]
+        self._report()
         if message:
             (self.rospy.logwarn if ok else self.rospy.logerr)('switch_controller: %s' % message)
         return (ok,)
@@ -398,6 +400,7 @@ class ArmSim(object):
                     return
                 self._start_goal(name, handle, trajectory.joint_names, points, trajectory.header.stamp,
                                  goal.path_tolerance, goal.goal_tolerance, goal.goal_time_tolerance.to_sec())
+            self._report()
         return on_goal
 
     def _start_goal(self, name, handle, joint_names, points, stamp, path_tolerance=(), goal_tolerance=(),
@@ -434,6 +437,7 @@ class ArmSim(object):
                 outcome = controller.cancel(handle.get_goal_id().id, self.q, self.qd)
                 if outcome is not None:
                     self._finish(name, outcome)
+            self._report()
         return on_cancel
 
     def _trajectory_command(self, name):
@@ -451,20 +455,29 @@ class ArmSim(object):
                 if controller.goal is not None and controller.goal.goal_id is not None:
                     self._finish(name, controller.cancel(controller.goal.goal_id, self.q, self.qd))
                 self._start_goal(name, None, trajectory.joint_names, points, trajectory.header.stamp)
+            self._report()
         return on_command
 
     def _finish(self, name, outcome):
+        """Queue a goal's end; _report() tells actionlib once self.lock is released."""
         handle = self.goal_handles.pop((name, outcome.goal_id), None)
-        if handle is None:
-            return
-        result = self._result(name, outcome.code, outcome.message)
-        if outcome.status == 'succeeded':
-            handle.set_succeeded(result, outcome.message)
-        elif outcome.status == 'aborted':
-            self.rospy.logwarn('%s: goal aborted: %s' % (name, outcome.message))
-            handle.set_aborted(result, outcome.message)
-        else:
-            handle.set_canceled(result, outcome.message)
+        if handle is not None:
+            self.finished.append((name, handle, outcome))
+
+    def _report(self):
+        # actionlib calls the goal and cancel callbacks holding its own lock, and they take
+        # self.lock: so a thread holding self.lock must never wait for actionlib's lock.
+        with self.lock:
+            finished, self.finished = self.finished, []
+        for name, handle, outcome in finished:
+            result = self._result(name, outcome.code, outcome.message)
+            if outcome.status == 'succeeded':
+                handle.set_succeeded(result, outcome.message)
+            elif outcome.status == 'aborted':
+                self.rospy.logwarn('%s: goal aborted: %s' % (name, outcome.message))
+                handle.set_aborted(result, outcome.message)
+            else:
+                handle.set_canceled(result, outcome.message)
 
     # -- Cartesian controllers ---------------------------------------------------------------
 
@@ -486,6 +499,7 @@ class ArmSim(object):
             with self.lock:
                 self._start_goal(name, handle, self.joints, points, goal.trajectory.header.stamp,
                                  goal_time_tolerance=goal.goal_time_tolerance.to_sec())
+            self._report()
         return on_goal
 
     def _cartesian_points(self, points, start):
@@ -683,6 +697,7 @@ class ArmSim(object):
                       if self.manager.controllers[name].running]
             state_samples = [(name, controller.spline.sample(controller.clock) if controller.spline else None)
                              for name, controller in states]
+        self._report()
         self._publish(q, qd, scaling, running, modes, io, state_samples)
 
     def _controller_stopper(self):
