@@ -104,8 +104,10 @@ class UrDriver(object):
 
 
 def joint_goal(names, points):
+    """A goal for the joints `names` (unprefixed: the model's ~prefix is put in front)."""
+    prefix = rospy.get_param('~prefix', '')
     goal = FollowJointTrajectoryGoal()
-    goal.trajectory.joint_names = list(names)
+    goal.trajectory.joint_names = [prefix + name for name in names]
     for seconds, positions in points:
         goal.trajectory.points.append(JointTrajectoryPoint(positions=list(positions),
                                                            time_from_start=rospy.Duration(seconds)))
