@@ -24,6 +24,7 @@ from geometry_msgs.msg import Twist, WrenchStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64, Float64MultiArray, String
 from std_srvs.srv import Trigger
+from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectoryPoint
 from transforms3d.quaternions import mat2quat
 from ur_dashboard_msgs.msg import RobotMode, SetModeAction, SetModeGoal
@@ -409,38 +410,41 @@ class ModelAlongTrajectoryTest(DriverTestBase):
                 finger.update(zip(msg.name, msg.position))
             return finger
         wait_until(finger_message, 'finger_joint on joint_states')
+        # robot_state_publisher turns some joint_states messages into TF (at its publish_frequency)
+        # and tf2 interpolates between them: compare at the stamps of its own arm transforms,
+        # with the joint_states message of each such stamp, after the motion (TF keeps 10 s).
+        tf_stamps = set()
+        last_link = self.prefix + 'wrist_3_link'
+
+        def on_tf(msg):
+            tf_stamps.update(t.header.stamp for t in msg.transforms if t.child_frame_id == last_link)
+        tf_sub = rospy.Subscriber('/tf', TFMessage, on_tf, queue_size=1000)
         recorder = rostest_helpers.Recorder('joint_states', JointState)
         client = self.driver.trajectory['scaled_pos_joint_traj_controller']
         start = time.monotonic()
         client.send_goal(joint_goal(JOINTS, [(3.0, AWAY)]))
-        frames = ['tool0'] + list(description.PADS)
-        checked = 0
-        while client.get_state() in (actionlib.GoalStatus.PENDING, actionlib.GoalStatus.ACTIVE) and \
-                time.monotonic() - start < TIMEOUT:
-            time.sleep(0.25)
-            # robot_state_publisher turns some of the joint_states messages into TF (at its
-            # publish_frequency) and TF interpolates between them: compare at a time TF has
-            # a sample of the arm, the stamp of its latest tool0, with the message of that stamp.
-            latest = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'tool0', rospy.Time(0))
-            stamp = latest.header.stamp
-            sample = [m for m in recorder.since(start) if m.header.stamp == stamp and
-                      self.prefix + 'shoulder_pan_joint' in m.name]
-            if not sample:
-                continue
-            positions = dict(finger, **dict(zip(sample[0].name, sample[0].position)))
+        self.assertTrue(client.wait_for_result(rospy.Duration(TIMEOUT)))
+        self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
+        time.sleep(0.5)
+        tf_sub.unregister()
+        samples = [m for m in recorder.since(start) if self.prefix + 'shoulder_pan_joint' in m.name and
+                   m.header.stamp in tf_stamps]
+        fractions_seen = []
+        for sample in samples[::max(1, len(samples) // 20)]:
+            positions = dict(finger, **dict(zip(sample.name, sample.position)))
             # One point with positions only: a straight line in joint space from HOME to AWAY.
             arm = np.array([positions[self.prefix + j] for j in JOINTS])
             fractions = (arm - HOME) / (np.array(AWAY) - HOME)
             np.testing.assert_allclose(fractions, fractions[0], atol=1e-6, err_msg='off the trajectory')
-            for frame in frames:
-                msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + frame, stamp,
-                                                   rospy.Duration(1.0))
+            fractions_seen.append(fractions[0])
+            for frame in ['tool0'] + list(description.PADS):
+                msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + frame,
+                                                   sample.header.stamp, rospy.Duration(1.0))
                 expected = model.transform(self.prefix + 'base_link', self.prefix + frame, positions)
                 np.testing.assert_allclose(rostest_helpers.transform_matrix(msg.transform), expected, atol=1e-6,
-                                           err_msg='%s at %s' % (frame, sample[0].position))
-            checked += 1
-        self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
-        self.assertGreaterEqual(checked, 5)
+                                           err_msg='%s at %s' % (frame, sample.position))
+        # Checked along the way, not only at the ends.
+        self.assertGreaterEqual(len([f for f in fractions_seen if 0.05 < f < 0.95]), 5, fractions_seen)
         # The FT 300 reads the gripper's weight in its own frame: it turns with the sensor.
         payload = wrench_model.load_payload(sim_params.default_devices_file())
         readings = []

@@ -388,3 +388,49 @@ def test_movej_profile_is_synchronous_and_within_limits():
     assert slow.total_time == pytest.approx(5.0)
     capped = urscript.JointMove([0.0] * 6, [3.0] + [0] * 5, 100.0, 10.0, 0.0, [1.0] * 6)
     assert capped.total_time > 3.0
+
+
+def test_stopping_the_controller_preempts_its_goal():
+    controller = jtc()
+    controller.accept(7, JOINTS, [Point(2.0, [0.4] * 6)], 0.0, [0] * 6, [0] * 6)
+    position, _ = run(controller, 0.5, [0] * 6)
+    outcome = controller.stop(position, [0.1] * 6)
+    assert (outcome.goal_id, outcome.status) == (7, 'preempted')
+    stopped, outcomes = run(controller, 1.0, position)
+    assert not outcomes and controller.goal is None
+
+
+# -- the node's parameters: bad input is one line ------------------------------------
+
+def settings_params(configured_model, **changes):
+    params = {'~ur_type': 'ur5e', '~controller_config_file': controllers_yaml('ur5e'),
+              '~controllers': ' '.join(STARTED), 'robot_description': configured_model('ur5e', True, True).text}
+    params.update(changes)
+    return lambda name, default=None: params.get(name, default)
+
+
+def test_settings_from_the_driver_configuration(configured_model):
+    from ur3_ft_gripper_description.devices.ur_arm.arm_sim import read_settings
+    settings = read_settings(settings_params(configured_model))
+    assert settings.loop_hz == 500 and settings.e_series and settings.joints == JOINTS
+    assert settings.robot.program_running
+
+
+@pytest.mark.parametrize('changes, words', [
+    ({'~controller_config_file': '/nonexistent.yaml'}, ['no such file']),
+    ({'~controllers': 'joint_state_controller no_such_controller'}, ['no_such_controller']),
+    ({'~robot_mode': 'BACKDRIVE'}, ['~robot_mode', 'POWER_OFF, IDLE or RUNNING']),
+    ({'~initial_positions': [0, 0, 0]}, ['~initial_positions', 'six']),
+    ({'~initial_positions': [0, 0, 9.0, 0, 0, 0]}, ['~initial_positions', 'limits']),
+    ({'robot_description': None}, ['robot_description is not set']),
+    ({'~prefix': 'cell_'}, ['robot_description', "'cell_'"]),
+], ids=['config', 'controller', 'mode', 'positions', 'beyond-limits', 'no-model', 'prefix'])
+def test_bad_settings_are_one_line(configured_model, changes, words):
+    from ur3_ft_gripper_description.devices import sim_params
+    from ur3_ft_gripper_description.devices.ur_arm.arm_sim import read_settings
+    with pytest.raises(sim_params.ParamError) as caught:
+        read_settings(settings_params(configured_model, **changes))
+    message = str(caught.value)
+    assert '\n' not in message
+    for word in words:
+        assert word in message, message

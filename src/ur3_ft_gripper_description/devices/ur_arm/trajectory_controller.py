@@ -102,10 +102,13 @@ class TrajectoryController(object):
                        % self.stop_trajectory_duration)
 
     def stop(self, position, velocity):
-        """The controller is stopped (switch, program stopped): its goal aborts, the joints stop."""
+        """The controller is stopped (switch, program stopped): its goal is preempted, the joints stop.
+
+        As joint_trajectory_controller's stopping(), which cancels the active goal.
+        """
         outcome = None
         if self.goal is not None:
-            outcome = Outcome(self.goal.goal_id, 'aborted', 'SUCCESSFUL',
+            outcome = Outcome(self.goal.goal_id, 'preempted', 'SUCCESSFUL',
                               'Controller stopped while the goal was active')
         self.goal = None
         self.spline = stop_spline(self.clock, position, velocity, self.stop_trajectory_duration)
