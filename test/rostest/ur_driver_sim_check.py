@@ -28,7 +28,8 @@ from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectoryPoint
 from transforms3d.quaternions import mat2quat
 from ur_dashboard_msgs.msg import RobotMode, SetModeAction, SetModeGoal
-from ur_dashboard_msgs.srv import GetRobotMode
+from ur_dashboard_msgs.msg import ProgramState
+from ur_dashboard_msgs.srv import GetLoadedProgram, GetProgramState, GetRobotMode, Load, RawRequest
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSliderFraction
 
@@ -71,6 +72,7 @@ class UrDriver(object):
         self.trajectory = {name: actionlib.SimpleActionClient(name + '/follow_joint_trajectory',
                                                               FollowJointTrajectoryAction)
                            for name in ('scaled_pos_joint_traj_controller', 'pos_joint_traj_controller',
+                                        'scaled_vel_joint_traj_controller', 'vel_joint_traj_controller',
                                         'forward_joint_traj_controller')}
         self.cartesian = {name: actionlib.SimpleActionClient(name + '/follow_cartesian_trajectory',
                                                              FollowCartesianTrajectoryAction)
@@ -84,6 +86,11 @@ class UrDriver(object):
                         resend=(HW + 'resend_robot_program', Trigger),
                         power_off=(HW + 'dashboard/power_off', Trigger), play=(HW + 'dashboard/play', Trigger),
                         get_robot_mode=(HW + 'dashboard/get_robot_mode', GetRobotMode),
+                        program_state=(HW + 'dashboard/program_state', GetProgramState),
+                        loaded_program=(HW + 'dashboard/get_loaded_program', GetLoadedProgram),
+                        load_program=(HW + 'dashboard/load_program', Load),
+                        raw_request=(HW + 'dashboard/raw_request', RawRequest),
+                        pause=(HW + 'dashboard/pause', Trigger),
                         version=(HW + 'get_robot_software_version', GetRobotSoftwareVersion))
         for key, (name, kind) in services.items():
             rospy.wait_for_service(name, TIMEOUT)
@@ -300,6 +307,35 @@ class RobotTest(DriverTestBase):
                                        strictness=SwitchControllerRequest.BEST_EFFORT)
         self.assertTrue(self.driver.switch(best).ok)
         self.assertEqual(self.driver.controller_states()['scaled_pos_joint_traj_controller'], 'running')
+
+    def test_every_joint_trajectory_controller_succeeds(self):
+        for controller in ('scaled_vel_joint_traj_controller', 'vel_joint_traj_controller',
+                           'forward_joint_traj_controller', 'scaled_pos_joint_traj_controller'):
+            self.driver.only(controller)
+            self.move_to(AWAY if controller != 'scaled_pos_joint_traj_controller' else HOME, seconds=1.5,
+                         controller=controller)
+
+    def test_dashboard_program_and_pause(self):
+        self.assertEqual(self.driver.program_state().state.state, ProgramState.PLAYING)
+        self.assertFalse(self.driver.load_program('no_such_program.urp').success)
+        self.assertTrue(self.driver.loaded_program().success is not None)
+        self.assertEqual(self.driver.raw_request('robotmode').answer, 'Robotmode: RUNNING')
+        # A paused program holds the scaled trajectory: speed scaling 0 until play.
+        self.move_to(HOME)
+        client = self.driver.trajectory['scaled_pos_joint_traj_controller']
+        client.send_goal(joint_goal(JOINTS, [(1.5, AWAY)]))
+        time.sleep(0.5)
+        self.assertTrue(self.driver.pause().success)
+        wait_until(lambda: rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data == 0.0,
+                   'speed_scaling_factor 0 while paused')
+        held, _ = arm_positions(self.prefix)
+        time.sleep(1.5)
+        np.testing.assert_allclose(arm_positions(self.prefix)[0], held, atol=1e-6)
+        self.assertEqual(client.get_state(), actionlib.GoalStatus.ACTIVE)
+        self.assertTrue(self.driver.play().success)
+        self.assertTrue(client.wait_for_result(rospy.Duration(TIMEOUT)))
+        self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
+        self.assert_at(AWAY)
 
     def test_set_io_shows_in_io_states(self):
         for state in (1.0, 0.0):

@@ -434,3 +434,11 @@ def test_bad_settings_are_one_line(configured_model, changes, words):
     assert '\n' not in message
     for word in words:
         assert word in message, message
+
+
+def test_play_resumes_a_paused_headless_program():
+    robot = rs.RobotState(headless=True)
+    assert robot.dashboard('pause') == 'Pausing program' and robot.speed_scaling() == 0.0
+    assert robot.dashboard('play') == 'Starting program' and robot.speed_scaling() == 1.0
+    robot.dashboard('stop')
+    assert robot.dashboard('play') == 'Failed to execute: play'  # nothing loaded in headless mode

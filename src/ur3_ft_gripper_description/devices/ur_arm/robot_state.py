@@ -182,6 +182,9 @@ class RobotState(object):
             self._head_for(RUNNING)
             return 'Brake releasing'
         if key == 'play':
+            if self.robot_mode == RUNNING and self.program_state == 'PAUSED':
+                self.program_state = 'PLAYING'  # resumes the paused program, e.g. headless mode's script
+                return 'Starting program'
             if self.robot_mode != RUNNING or self.loaded_program is None:
                 return 'Failed to execute: play'
             self.program_state = 'PLAYING'
