@@ -80,6 +80,10 @@ class UrDriver(object):
                                        'forward_cartesian_traj_controller')}
         for client in [self.set_mode] + list(self.trajectory.values()) + list(self.cartesian.values()):
             assert client.wait_for_server(rospy.Duration(TIMEOUT)), 'no action server %s' % client.action_client.ns
+            # wait_for_server sees the server's status; a goal sent before the server subscribed
+            # to the goal topic would be lost.
+            wait_until(lambda: client.action_client.pub_goal.get_num_connections() > 0,
+                       'the server of %s subscribes to its goals' % client.action_client.ns)
         services = dict(list_controllers=('controller_manager/list_controllers', ListControllers),
                         switch=('controller_manager/switch_controller', SwitchController),
                         set_io=(HW + 'set_io', SetIO), slider=(HW + 'set_speed_slider', SetSpeedSliderFraction),
@@ -181,6 +185,20 @@ class JointTrajectoryTest(DriverTestBase):
         self.assertEqual(result.error_code, FollowJointTrajectoryResult.SUCCESSFUL, result.error_string)
         self.assertEqual(state, actionlib.GoalStatus.SUCCEEDED)
         self.assert_at(HOME)
+
+    def test_goal_time_tolerance_fails_an_arrival_the_robot_cannot_make(self):
+        # As ur_robot_driver's integration test: a fast last segment, first without a goal time
+        # (the config's goal_time applies: success), then with 0.01 s, which the robot's servo cannot
+        # settle within (GOAL_TOLERANCE_VIOLATED).
+        self.move_to(HOME)
+        goal = joint_goal(JOINTS, [(1.0, HOME), (1.5, AWAY)])
+        state, result = self.run_goal(goal)
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.SUCCESSFUL, result.error_string)
+        goal = joint_goal(JOINTS, [(1.0, AWAY), (1.5, HOME)])
+        goal.goal_time_tolerance = rospy.Duration(0.01)
+        state, result = self.run_goal(goal)
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.GOAL_TOLERANCE_VIOLATED)
+        self.assertEqual(state, actionlib.GoalStatus.ABORTED)
 
     def test_unscaled_controller_succeeds(self):
         self.driver.only('pos_joint_traj_controller')
@@ -328,6 +346,7 @@ class RobotTest(DriverTestBase):
         self.assertTrue(self.driver.pause().success)
         wait_until(lambda: rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data == 0.0,
                    'speed_scaling_factor 0 while paused')
+        time.sleep(0.3)  # the joints settle on the held command (servoj's lookahead time, 0.03 s)
         held, _ = arm_positions(self.prefix)
         time.sleep(1.5)
         np.testing.assert_allclose(arm_positions(self.prefix)[0], held, atol=1e-6)

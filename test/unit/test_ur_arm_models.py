@@ -442,3 +442,14 @@ def test_play_resumes_a_paused_headless_program():
     assert robot.dashboard('play') == 'Starting program' and robot.speed_scaling() == 1.0
     robot.dashboard('stop')
     assert robot.dashboard('play') == 'Failed to execute: play'  # nothing loaded in headless mode
+
+
+def test_joints_follow_with_the_servo_lag_within_their_limits():
+    from ur3_ft_gripper_description.devices.ur_arm.joints import follow
+    lower, upper, vmax = [-1.0] * 6, [1.0] * 6, [0.5] * 6
+    position, velocity = follow([0.0] * 6, [0.01] + [0.0] * 5, 0.002, 0.03, vmax, lower, upper)
+    assert position[0] == pytest.approx(0.01 * 0.002 / 0.03)  # first-order lag
+    position, velocity = follow([0.0] * 6, [0.9] * 6, 0.002, 0.0, vmax, lower, upper)
+    assert np.allclose(velocity, 0.5)  # no faster than the limits
+    position, _ = follow([0.99] * 6, [5.0] * 6, 0.1, 0.0, [100.0] * 6, lower, upper)
+    assert np.allclose(position, 1.0)  # never beyond them

@@ -34,6 +34,7 @@ from .. import sim_params
 from ..node_loop import main as node_main
 from ..node_loop import watch_master
 from . import controller_manager as cm
+from . import joints
 from . import robot_state as rs
 from . import urscript
 from .arm_kinematics import ArmKinematics
@@ -88,6 +89,8 @@ class ArmSim(object):
         self.manager, self.arm, self.e_series = settings.manager, settings.arm, settings.e_series
         self.robot = settings.robot
         self.q = settings.initial
+        self.servo_lag = settings.servo_lag
+        self.streaming = False
         self.qd = np.zeros(6)
 
         self.trajectory_controllers = {}
@@ -653,12 +656,12 @@ class ArmSim(object):
         with self.lock:
             self.robot.step(dt)
             self._controller_stopper()
+            self.streaming = False
             command = self._command(dt)
-            # The joints follow, no faster than their limits, inside their limits.
-            reach = self.arm.velocity * dt
-            moved = np.clip(np.clip(command, self.q - reach, self.q + reach), self.arm.lower, self.arm.upper)
-            self.qd = (moved - self.q) / dt if dt > 0 else np.zeros(6)
-            self.q = moved
+            # Streamed positions go through servoj's smoothing; the robot's own motions
+            # (movej, speedj for the velocity and twist controllers, holding still) do not.
+            self.q, self.qd = joints.follow(self.q, command, dt, self.servo_lag if self.streaming else 0.0,
+                                            self.arm.velocity, self.arm.lower, self.arm.upper)
             scaling = self.robot.speed_scaling() * self.limit_factor
             q, qd = self.q.copy(), self.qd.copy()
             running = self.robot.program_running
@@ -707,6 +710,7 @@ class ArmSim(object):
             if trajectory is not None:
                 position, _, outcomes = trajectory.update(dt, scaling, self.q, self.qd)
                 self.limit_factor = trajectory.limit_factor
+                self.streaming = True
                 for outcome in outcomes:
                     self._finish(controller.name, outcome)
                 return position
@@ -827,6 +831,7 @@ def read_settings(get_param):
         raise sim_params.ParamError('~initial_positions=%r must be six finite joint positions within the '
                                     'model\'s limits (rad)' % (get_param('~initial_positions', None),))
     settings.initial = initial
+    settings.servo_lag = sim_params.number(get_param, '~servoj_lookahead_time', 0.03, minimum=0.0)
     settings.e_series = ur_type.endswith('e')
     mode = get_param('~robot_mode', 'RUNNING')
     if mode not in rs.SELECTABLE_MODES:
