@@ -78,16 +78,21 @@ class GripperRegistersTest(unittest.TestCase):
     def test_activation_runs_through_in_progress_to_completed(self):
         sent = self.gripper.activate()
         activating = self.gripper.wait_status(lambda s: s.gSTA == ACTIVATING, since=sent)
-        self.assertEqual((activating.gACT, activating.gFLT), (1, 0))
+        # rGTO 1 sent with rACT waits for the activation: "action delayed" until then.
+        self.assertEqual((activating.gACT, activating.gFLT), (1, 0x05))
         done = self.gripper.wait_status(lambda s: s.gSTA == ACTIVE, since=sent)
         self.assertEqual((done.gACT, done.gGTO, done.gFLT), (1, 1, 0))
         opened = self.gripper.wait_status(lambda s: s.gOBJ == AT_REQUESTED_POSITION, since=sent)
         self.assertEqual((opened.gPR, opened.gPO), (0, 3))
 
     def test_motion_before_activation_is_refused_with_the_activation_fault(self):
+        before = self.gripper.wait_status(lambda s: True)
         sent = self.gripper.send(rACT=0, rGTO=1, rPR=255, rSP=255)
         refused = self.gripper.wait_status(lambda s: s.gFLT != 0, since=sent)
-        self.assertEqual((refused.gFLT, refused.gSTA, refused.gPO), (0x07, RESET, 3))
+        time.sleep(0.5)
+        later = self.gripper.wait_status(lambda s: True)
+        self.assertEqual((refused.gFLT, refused.gSTA), (0x07, RESET))
+        self.assertEqual((later.gFLT, later.gPO), (0x07, before.gPO))  # the fingers did not move
 
     def test_close_and_open_report_motion_then_the_requested_position(self):
         self.active_and_open()

@@ -33,10 +33,12 @@ def quickstart_shell(home, command):
 
 def test_a_rostest_runs_inside_the_shell_despite_the_bashrc(tmp_path):
     home, bare = home_whose_bashrc_puts_a_python_without_rospy_first(tmp_path)
-    run = quickstart_shell(home, 'command -v python3; rostest ur3_ft_gripper_description tf_chain.test')
+    run = quickstart_shell(home, 'echo "python3=$(command -v python3)"; rostest ur3_ft_gripper_description tf_chain.test')
     assert run.returncode == 0, run.stdout[-3000:]
-    assert str(bare) not in run.stdout.splitlines()[-1] and 'SUMMARY' in run.stdout, run.stdout[-3000:]
-    assert 'ERROR' not in run.stdout.split('SUMMARY')[-1] and 'FAILURES: 0' in run.stdout, run.stdout[-3000:]
+    python3 = [line for line in run.stdout.splitlines() if line.startswith('python3=')]
+    assert python3 and python3[0] != 'python3=%s' % bare, run.stdout[-3000:]
+    summary = run.stdout.split('SUMMARY')[-1]
+    assert 'RESULT: SUCCESS' in summary and '* ERRORS: 0' in summary and '* FAILURES: 0' in summary, summary
 
 
 def test_the_bashrc_alone_would_have_broken_the_nodes(tmp_path):
