@@ -356,6 +356,18 @@ class RobotTest(DriverTestBase):
         self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
         self.assert_at(AWAY)
 
+    def test_read_only_controllers_publish_while_they_run(self):
+        stop = SwitchControllerRequest(stop_controllers=['force_torque_sensor_controller'],
+                                       strictness=SwitchControllerRequest.STRICT)
+        self.assertTrue(self.driver.switch(stop).ok)
+        time.sleep(0.2)
+        with self.assertRaises(rospy.ROSException):
+            rospy.wait_for_message('wrench', WrenchStamped, 1.0)
+        start = SwitchControllerRequest(start_controllers=['force_torque_sensor_controller'],
+                                        strictness=SwitchControllerRequest.STRICT)
+        self.assertTrue(self.driver.switch(start).ok)
+        rospy.wait_for_message('wrench', WrenchStamped, TIMEOUT)
+
     def test_set_io_shows_in_io_states(self):
         for state in (1.0, 0.0):
             response = self.driver.set_io(SetIORequest(fun=SetIORequest.FUN_SET_DIGITAL_OUT,

@@ -62,6 +62,8 @@ CB3_SOFTWARE = (3, 15, 7, 0)
 # Step between two Cartesian points turned into joint positions, s.
 CARTESIAN_STEP = 0.02
 SET_MODE_TIMEOUT = 30.0
+# The read-only controllers of the config and what each publishes.
+READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_torque_sensor_controller')
 
 
 class ArmSim(object):
@@ -672,8 +674,11 @@ class ArmSim(object):
                       if self.manager.controllers[name].running]
             state_samples = [(name, controller.spline.sample(controller.clock) if controller.spline else None)
                              for name, controller in states]
+            # The read-only controllers publish while they run, as on the robot.
+            reading = {name for name in READ_ONLY if name in self.manager.controllers and
+                       self.manager.controllers[name].running}
         self._report()
-        self._publish(q, qd, scaling, running, modes, io, state_samples)
+        self._publish(q, qd, scaling, running, modes, io, state_samples, reading)
 
     def _controller_stopper(self):
         running = self.robot.program_running
@@ -733,13 +738,14 @@ class ArmSim(object):
             self.script_move = None
         return target
 
-    def _publish(self, q, qd, scaling, running, modes, io, state_samples):
+    def _publish(self, q, qd, scaling, running, modes, io, state_samples, reading):
         rospy, msg = self.rospy, self.msg
         now = rospy.Time.now()
         joint_state = msg['JointState'](name=self.joints, position=q.tolist(), velocity=qd.tolist(),
                                         effort=[0.0] * 6)
         joint_state.header.stamp = now
-        self.joint_states.publish(joint_state)
+        if 'joint_state_controller' in reading:
+            self.joint_states.publish(joint_state)
         pose = self.arm.forward(q)
         transform = msg['TransformStamped']()
         transform.header.stamp = now
@@ -751,11 +757,13 @@ class ArmSim(object):
         transform.transform.rotation.w, transform.transform.rotation.x = w, x
         transform.transform.rotation.y, transform.transform.rotation.z = y, z
         self.tf.sendTransform(transform)
-        self.speed_scaling.publish(msg['Float64'](data=scaling))
+        if 'speed_scaling_state_controller' in reading:
+            self.speed_scaling.publish(msg['Float64'](data=scaling))
         wrench = msg['WrenchStamped']()
         wrench.header.stamp = now
         wrench.header.frame_id = self.prefix + 'tool0_controller'
-        self.wrench.publish(wrench)
+        if 'force_torque_sensor_controller' in reading:
+            self.wrench.publish(wrench)
         digital_in, digital_out, analog_in, analog_out = io
         self.io_states.publish(msg['IOStates'](
             digital_in_states=[msg['Digital'](pin=i, state=s) for i, s in enumerate(digital_in)],
