@@ -1,4 +1,3 @@
-#!/usr/bin/env python3
 """Debian's joint_state_publisher_gui, with QSlider.setValue taking the floats it passes."""
 import runpy
 import sys
