@@ -29,9 +29,13 @@ GOALS = {'expansion': 1.25, 'bringup': 1.15}
 def xacro_setup():
     """(xacro executable, environment for roslaunch, description) for both models."""
     import rospkg
+    from catkin_pkg.package import parse_package
     from roslaunch.substitution_args import resolve_args
     path = resolve_args('$(find xacro)/xacro')  # what upstream's load_ur.launch runs
-    return path, dict(os.environ), 'xacro %s (%s)' % (rospkg.RosPack().get_manifest('xacro').version, path)
+    # package.xml's version, read without rospkg's manifest, which asks rosdep and
+    # says its database is empty on a machine that never needed one.
+    version = parse_package(rospkg.RosPack().get_path('xacro')).version
+    return path, dict(os.environ), 'xacro %s (%s)' % (version, path)
 
 
 def upstream_xacro_file():
