@@ -70,7 +70,7 @@ def _causes(exc):
 
 
 def _ur_type_hint(exc):
-    """'; ur_type: use one of ur3, ...' when xacro lacked a default file of ur_description/config."""
+    """'; the installed ur_description has the models ur3, ...' when xacro lacked one of their files."""
     for cause in _causes(exc):
         if isinstance(cause, FileNotFoundError) and cause.filename:
             try:
@@ -79,7 +79,7 @@ def _ur_type_hint(exc):
                 return ''
             path = os.path.realpath(cause.filename)
             if path.startswith(config + os.sep) and os.path.basename(path) in UR_DEFAULT_FILES.values():
-                return '; ur_type: use one of %s' % ', '.join(ur_types())
+                return '; the installed ur_description has the models %s' % ', '.join(ur_types())
     return ''
 
 
