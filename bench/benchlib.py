@@ -6,23 +6,18 @@ touches a master someone else uses, and stops only the processes it started.
 import datetime
 import os
 import platform
-import signal
-import socket
 import statistics
 import subprocess
 import sys
-import time
 import xmlrpc.client
 
 BENCH_DIR = os.path.dirname(os.path.abspath(__file__))
 PACKAGE_DIR = os.path.dirname(BENCH_DIR)
 CLK_TCK = os.sysconf('SC_CLK_TCK')
 
-
-def free_port():
-    with socket.socket() as s:
-        s.bind(('localhost', 0))
-        return s.getsockname()[1]
+# Free ports, masters, stopping processes and waiting: the tests' helpers, one home for both.
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
+from rostest_helpers import free_port, master_pid, stop, wait_for  # noqa: E402,F401
 
 
 def use_new_master():
@@ -32,41 +27,8 @@ def use_new_master():
     os.environ['ROS_MASTER_URI'] = uri
     log = open(os.devnull, 'w')
     process = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=log, stderr=log)
-    wait_for(lambda: master_pid(uri), 30, 'rosmaster on port %d' % port)
+    wait_for(lambda: master_pid(uri), 'rosmaster on port %d' % port, 30)
     return process
-
-
-def master_pid(uri):
-    try:
-        return xmlrpc.client.ServerProxy(uri).getPid('/bench')[2]
-    except OSError:
-        return None
-
-
-def wait_for(condition, timeout, what, step=0.01):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        value = condition()
-        if value:
-            return value
-        time.sleep(step)
-    raise RuntimeError('timed out after %g s waiting for %s' % (timeout, what))
-
-
-def stop(process, timeout=30):
-    """SIGINT (what roslaunch and rospy expect), then SIGKILL if it does not go.
-
-    30 s: roslaunch itself gives a node 15 s after SIGINT, then SIGTERM, then
-    SIGKILL; killing roslaunch sooner left a node that hung in shutdown orphaned.
-    """
-    if process is None or process.poll() is not None:
-        return
-    process.send_signal(signal.SIGINT)
-    try:
-        process.wait(timeout)
-    except subprocess.TimeoutExpired:
-        process.kill()
-        process.wait()
 
 
 def roslaunch(*args, env=None, log=None):

@@ -29,9 +29,13 @@ GOALS = {'expansion': 1.25, 'bringup': 1.15}
 def xacro_setup():
     """(xacro executable, environment for roslaunch, description) for both models."""
     import rospkg
+    from catkin_pkg.package import parse_package
     from roslaunch.substitution_args import resolve_args
     path = resolve_args('$(find xacro)/xacro')  # what upstream's load_ur.launch runs
-    return path, dict(os.environ), 'xacro %s (%s)' % (rospkg.RosPack().get_manifest('xacro').version, path)
+    # package.xml's version, read without rospkg's manifest, which asks rosdep and
+    # says its database is empty on a machine that never needed one.
+    version = parse_package(rospkg.RosPack().get_path('xacro')).version
+    return path, dict(os.environ), 'xacro %s (%s)' % (version, path)
 
 
 def upstream_xacro_file():
@@ -151,8 +155,8 @@ def bench_ft300(rate, seconds, rospy, both=True):
     process = benchlib.node('ft300_sim', '__name:=robotiq_ft_sensor', '__ns:=/%s' % name,
                             '_rate:=%g' % rate)
     try:
-        benchlib.wait_for(lambda: wrench.last() and (stream.last() or not both), 30,
-                          'ft300_sim at %g Hz on %s' % (rate, 'both topics' if both else 'the wrench'))
+        benchlib.wait_for(lambda: wrench.last() and (stream.last() or not both),
+                          'ft300_sim at %g Hz on %s' % (rate, 'both topics' if both else 'the wrench'), 30)
         time.sleep(1.0)  # warm-up
         cpu0, t0 = benchlib.cpu_seconds(process.pid), time.monotonic()
         time.sleep(seconds)
@@ -195,9 +199,9 @@ def bench_gripper(commands, rospy):
     process = benchlib.node('gripper_sim', '__name:=robotiq2FGripper')
     latencies = []
     try:
-        benchlib.wait_for(lambda: received.last() and publisher.get_num_connections(), 30, 'gripper_sim')
+        benchlib.wait_for(lambda: received.last() and publisher.get_num_connections(), 'gripper_sim', 30)
         publisher.publish(command(100))  # activate (1.5 s), then move to 100
-        benchlib.wait_for(lambda: settled_at(100), 30, 'the gripper activated at gPO 100')
+        benchlib.wait_for(lambda: settled_at(100), 'the gripper activated at gPO 100', 30)
         for i in range(commands):
             # 20 counts (12 mm) each way, closing and opening in turn.
             target = 120 if i % 2 == 0 else 100
@@ -217,7 +221,7 @@ def bench_gripper(commands, rospy):
             if first is None:
                 raise RuntimeError('gripper_sim did not move toward gPO %d within 2 s' % target)
             latencies.append(first - sent)
-            benchlib.wait_for(lambda: settled_at(target), 10, 'the gripper at gPO %d' % target)
+            benchlib.wait_for(lambda: settled_at(target), 'the gripper at gPO %d' % target, 10, step=0.01)
     finally:
         benchlib.stop(process)
         subscriber.unregister()
@@ -363,7 +367,7 @@ def main(argv=None):
         launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
                                     'load:=%s' % our_launch, env=env)
         try:
-            benchlib.wait_for(lambda: rospy.has_param('robot_description'), 60, 'robot_description')
+            benchlib.wait_for(lambda: rospy.has_param('robot_description'), 'robot_description', 60)
             results['ft_seconds'] = 2.0 if args.short else 10.0
             results['ft300'] = []
             for rate, both in FT300_RUNS:

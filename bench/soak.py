@@ -136,7 +136,7 @@ def main(argv=None):
         command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
                                   queue_size=10)
         benchlib.wait_for(lambda: wrench.latest and joints.latest and command.get_num_connections(),
-                          60, 'the wrench, the gripper\'s joint states and its command subscriber')
+                          'the wrench, the gripper\'s joint states and its command subscriber', 60)
         pids = {name: benchlib.node_pid('/' + name)
                 for name in ('robotiq_ft_sensor', 'robotiq2FGripper', 'gripper_joint_states')}
 
@@ -171,8 +171,8 @@ def main(argv=None):
             rss_max[n] = max(rss_max[n], rss_end[n])
         # The last command is reached within 0.56 s (full stroke at rSP 255).
         try:
-            status = benchlib.wait_for(lambda: arrived(target), 10, 'the gripper at rPR %d' % target)
-        except RuntimeError:
+            status = benchlib.wait_for(lambda: arrived(target), 'the gripper at rPR %d' % target, 10, step=0.01)
+        except AssertionError:
             status = None
     finally:
         benchlib.stop(launch)

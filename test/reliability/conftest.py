@@ -2,21 +2,19 @@
 import os
 import subprocess
 import sys
-import time
 
 import pytest
 
 PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-BENCH_DIR = os.path.join(PACKAGE_DIR, 'bench')
-sys.path.insert(0, BENCH_DIR)
-import benchlib  # noqa: E402  (the benchmarks' own helpers: one way to start a master)
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
+from rostest_helpers import free_port, master_pid, stop, wait_for  # noqa: E402  (the tests' one helper module)
 
 
 class Master(object):
     """A rosmaster this test owns; can be killed and started again on the same port."""
 
     def __init__(self):
-        self.port = benchlib.free_port()
+        self.port = free_port()
         self.uri = 'http://localhost:%d' % self.port
         self.env = dict(os.environ, ROS_MASTER_URI=self.uri)
         self.process = None
@@ -24,7 +22,7 @@ class Master(object):
     def start(self):
         self.process = subprocess.Popen(['rosmaster', '--core', '-p', str(self.port)],
                                         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        benchlib.wait_for(lambda: benchlib.master_pid(self.uri), 30, 'rosmaster on %s' % self.uri)
+        wait_for(lambda: master_pid(self.uri), 'rosmaster on %s' % self.uri, 30, step=0.2)
 
     def kill(self):
         self.process.kill()
@@ -36,16 +34,12 @@ def master():
     m = Master()
     m.start()
     yield m
-    benchlib.stop(m.process)
+    stop(m.process)
 
 
 def run(argv, env=None, timeout=300):
     return subprocess.run(argv, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True,
                           env=env, timeout=timeout)
-
-
-def wait_for(condition, timeout, what):
-    return benchlib.wait_for(condition, timeout, what, step=0.2)
 
 
 def topic_message(topic, env, timeout=20):
@@ -55,12 +49,3 @@ def topic_message(topic, env, timeout=20):
     except subprocess.TimeoutExpired:
         return None
     return got.stdout if got.returncode == 0 else None
-
-
-def wait_until(predicate, timeout):
-    end = time.monotonic() + timeout
-    while time.monotonic() < end:
-        if predicate():
-            return True
-        time.sleep(0.2)
-    return False

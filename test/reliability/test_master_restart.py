@@ -4,7 +4,7 @@ again on the same port)."""
 import subprocess
 import tempfile
 
-from conftest import benchlib, topic_message, wait_until
+from conftest import stop, topic_message, wait_for
 
 NODES = ('/robotiq_ft_sensor', '/robotiq2FGripper', '/gripper_joint_states')
 
@@ -44,8 +44,8 @@ MODEL = ['roslaunch', 'ur3_ft_gripper_description', 'view_ur3_ft_gripper.launch'
 def start_model(master, log, processes):
     """The model launch (added to `processes`), once robot_state_publisher publishes TF on this master."""
     processes.append(subprocess.Popen(MODEL, stdout=log, stderr=subprocess.STDOUT, env=master.env))
-    assert wait_until(lambda: '/robot_state_publisher' in publishers(master.uri).get('/tf', []), 60), \
-        tail(log)
+    wait_for(lambda: '/robot_state_publisher' in publishers(master.uri).get('/tf', []),
+             lambda: 'robot_state_publisher on /tf; log: %s' % tail(log), 60, step=0.2)
 
 
 def first_messages(env):
@@ -76,24 +76,27 @@ def test_nodes_exit_once_and_respawn_on_a_restarted_master(master):
         start_model(master, model_log, processes)
         processes.append(subprocess.Popen(['roslaunch', 'ur3_ft_gripper_description', 'sim_devices.launch'],
                                           stdout=log, stderr=subprocess.STDOUT, env=master.env))
-        assert wait_until(lambda: registered(master.uri), 60), (system_state(master.uri), tail(log))
+        wait_for(lambda: registered(master.uri), lambda: 'the devices registered: %s; log: %s' % (
+            system_state(master.uri), tail(log)), 60, step=0.2)
         assert_publishing(master.env, log, 'before the restart')
-        benchlib.stop(processes.pop(0))  # the model: a new master needs it again
+        stop(processes.pop(0))  # the model: a new master needs it again
         master.kill()
         master.start()
         start_model(master, model_log, processes)
         # Readiness on the new master: registration, then a first message from each node.
-        assert wait_until(lambda: registered(master.uri), 60), (system_state(master.uri), tail(log))
+        wait_for(lambda: registered(master.uri), lambda: 'the devices registered: %s; log: %s' % (
+            system_state(master.uri), tail(log)), 60, step=0.2)
         assert_publishing(master.env, log, 'after the restart')
         # A new publisher reaches the respawned gripper.
         subprocess.run(['rostopic', 'pub', '-1', '/Robotiq2FGripperRobotOutput',
                         'robotiq_2f_gripper_control/Robotiq2FGripper_robot_output', '{rACT: 1}'],
                        env=master.env, stdout=subprocess.DEVNULL, timeout=30, check=True)
-        assert wait_until(lambda: 'gSTA: 3' in (topic_message('/Robotiq2FGripperRobotInput', master.env) or ''), 30)
+        wait_for(lambda: 'gSTA: 3' in (topic_message('/Robotiq2FGripperRobotInput', master.env) or ''),
+                 'gSTA 3 after rACT 1', 30, step=0.2)
         assert processes[0].poll() is None, 'roslaunch of sim_devices.launch exited'
     finally:
         for process in reversed(processes):
-            benchlib.stop(process)
+            stop(process)
     output = tail(log, chars=10 ** 7)
     for node in NODES:
         lines = [line for line in output.splitlines() if node + ': the ROS master' in line]
@@ -108,14 +111,15 @@ def test_a_node_started_before_the_master_waits_for_it(master):
     node = subprocess.Popen(['rosrun', 'ur3_ft_gripper_description', 'gripper_sim'],
                             stdout=log, stderr=subprocess.STDOUT, env=master.env)
     try:
-        assert wait_until(lambda: 'waiting for the ROS master' in tail(log), 60), tail(log)
+        wait_for(lambda: 'waiting for the ROS master' in tail(log), lambda: 'the line; log: %s' % tail(log), 60,
+                 step=0.2)
         assert node.poll() is None, tail(log)
         master.start()
-        assert wait_until(lambda: '/robotiq2FGripper' in system_state_or_empty(master.uri)[1].get(
-            '/Robotiq2FGripperRobotOutput', []), 60), tail(log)
+        wait_for(lambda: '/robotiq2FGripper' in system_state_or_empty(master.uri)[1].get(
+            '/Robotiq2FGripperRobotOutput', []), lambda: 'gripper_sim subscribed; log: %s' % tail(log), 60, step=0.2)
         assert 'gSTA' in (topic_message('/Robotiq2FGripperRobotInput', master.env, timeout=60) or '')
     finally:
-        benchlib.stop(node)
+        stop(node)
     output = tail(log, chars=10 ** 7)
     assert output.count('waiting for the ROS master') == 1, output
     assert 'Traceback' not in output, output

@@ -1,6 +1,5 @@
 #!/usr/bin/env python3
 """rostest node: the real-cell bring-up with sim:=true, run for real (bringup_sim.test)."""
-import time
 import unittest
 
 import numpy as np
@@ -13,7 +12,7 @@ from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq
 from sensor_msgs.msg import JointState
 
 import rostest_helpers
-from rostest_helpers import TIMEOUT
+from rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import gripper_joint_states, gripper_model
 ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
@@ -21,18 +20,6 @@ ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist
 # TF against the model: the finger angle table is exact to 1e-6 rad, which
 # moves a pad by far less than 1e-5 m; the register is one count = 0.6 mm.
 GAP_TOLERANCE = 1e-5
-
-
-def wait_until(check, what, timeout=TIMEOUT):
-    """check() until it returns something true, or fail naming `what` and the last value."""
-    end = time.monotonic() + timeout
-    value = None
-    while time.monotonic() < end:
-        value = check()
-        if value:
-            return value
-        rospy.sleep(0.02)
-    raise AssertionError('%s: not within %g s (last: %r)' % (what, timeout, value))
 
 
 class BringupSimTest(unittest.TestCase):
@@ -54,7 +41,7 @@ class BringupSimTest(unittest.TestCase):
 
         cls.command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
                                       queue_size=1, latch=True)
-        wait_until(lambda: cls.command.get_num_connections(), 'robotiq2FGripper subscribes')
+        wait_for(lambda: cls.command.get_num_connections(), 'robotiq2FGripper subscribes')
 
     def status(self):
         return rospy.wait_for_message('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, TIMEOUT)
@@ -73,18 +60,18 @@ class BringupSimTest(unittest.TestCase):
     def move_to(self, position):
         """Command rPR = position; return the settled gPO once the gripper reports the motion done."""
         self.send(rACT=1, rGTO=1, rPR=position, rSP=255, rFR=150)
-        done = wait_until(lambda: (lambda s: s if s.gPR == position and s.gOBJ == 3 else None)(self.status()),
+        done = wait_for(lambda: (lambda s: s if s.gPR == position and s.gOBJ == 3 else None)(self.status()),
                           'gripper reports rPR %d reached' % position)
         expected = self.expected_gap(done.gPO)
-        wait_until(lambda: abs(self.pad_gap() - expected) <= GAP_TOLERANCE,
+        wait_for(lambda: abs(self.pad_gap() - expected) <= GAP_TOLERANCE,
                    'TF pad gap reaches %.6f m for gPO %d' % (expected, done.gPO))
         return done.gPO, self.pad_gap()
 
     def test_fingers_follow_register_commands_in_tf(self):
         self.send()  # reset, then activate as Robotiq's controllers do
-        wait_until(lambda: self.status().gSTA == 0, 'reset')
+        wait_for(lambda: self.status().gSTA == 0, 'reset')
         self.send(rACT=1, rGTO=1, rSP=255, rFR=150)
-        wait_until(lambda: self.status().gSTA == 3, 'activation completes')
+        wait_for(lambda: self.status().gSTA == 3, 'activation completes')
         _, open_gap = self.move_to(0)
         closed_gpo, closed_gap = self.move_to(255)
         half_gpo, half_gap = self.move_to(128)
@@ -109,7 +96,7 @@ class BringupSimTest(unittest.TestCase):
             names = set(rospy.wait_for_message('joint_states', JointState, TIMEOUT).name)
             seen.append(names)
             return arm in seen and finger in seen
-        wait_until(both_seen, 'arm and finger messages on joint_states')
+        wait_for(both_seen, 'arm and finger messages on joint_states')
         for names in seen:
             self.assertIn(names, (arm, finger), 'a message mixes or misses joints: %s' % sorted(names))
 

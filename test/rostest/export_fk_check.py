@@ -68,12 +68,6 @@ class ExportFkTest(unittest.TestCase):
                 self.assertTrue(uri.startswith('file:///' if mode == 'absolute' else 'package://'), uri)
                 self.assertTrue(os.path.isfile(export.resolve_uri(uri)), uri)
 
-    def wait_for_subscriber(self):
-        deadline = rospy.Time.now() + TIMEOUT
-        while self.publisher.get_num_connections() == 0:
-            self.assertLess(rospy.Time.now(), deadline, 'robot_state_publisher never subscribed')
-            rospy.sleep(0.05)
-
     def publish_until_in_tf(self, cfg, moving_link):
         """Publish joint values until robot_state_publisher has put them in TF; their stamp.
 
@@ -92,7 +86,7 @@ class ExportFkTest(unittest.TestCase):
             self.assertLess(rospy.Time.now(), deadline, 'robot_state_publisher never used the joint states')
 
     def test_tf_equals_independent_forward_kinematics_for_random_joint_values(self):
-        self.wait_for_subscriber()
+        rostest_helpers.wait_for_subscribers(self.publisher)
         rng = np.random.default_rng(1234)
         root = self.urdf.base_link
         moving = self.urdf.actuated_joint_names

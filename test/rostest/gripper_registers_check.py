@@ -40,14 +40,12 @@ class RegisterClient(object):
     def wait_status(self, check, since=None, timeout=TIMEOUT):
         """The first status received after `since` (default: now) for which `check` holds."""
         start = time.monotonic() if since is None else since
-        end = start + timeout
-        while time.monotonic() < end:
-            for status in self.statuses.since(start):
-                if check(status):
-                    return status
-            time.sleep(0.01)
-        last = self.statuses.since(0.0)[-1:] or ['nothing']
-        raise AssertionError('the gripper status never matched within %g s; last:\n%s' % (timeout, last[0]))
+        try:
+            return rostest_helpers.wait_for(lambda: next((s for s in self.statuses.since(start) if check(s)), None),
+                                            'a gripper status that matches', timeout, step=0.01)
+        except AssertionError as e:
+            last = self.statuses.since(0.0)[-1:] or ['nothing']
+            raise AssertionError('%s; last status:\n%s' % (e, last[0])) from None
 
     def reset(self):
         return self.wait_status(lambda s: s.gACT == 0 and s.gSTA == RESET, since=self.send())
@@ -129,13 +127,9 @@ class GripperRegistersTest(unittest.TestCase):
                 lambda s: s.gPR == request and s.gOBJ == AT_REQUESTED_POSITION, since=sent)
             # TF follows through gripper_joint_states, joint_state_publisher and
             # robot_state_publisher: wait until it shows the final status.
-            end = time.monotonic() + TIMEOUT
-            while True:
-                gap = rostest_helpers.pad_gap(self.buffer, self.fingers)
-                if abs(gap - position) <= GAP_TOLERANCE or time.monotonic() > end:
-                    break
-                time.sleep(0.05)
-            self.assertAlmostEqual(gap, position, delta=GAP_TOLERANCE, msg='rPR %d, gPO %d' % (request, final.gPO))
+            rostest_helpers.wait_for(
+                lambda: abs(rostest_helpers.pad_gap(self.buffer, self.fingers) - position) <= GAP_TOLERANCE,
+                'the pads %g m apart in TF (rPR %d, gPO %d)' % (position, request, final.gPO))
 
 
 if __name__ == '__main__':

@@ -1,6 +1,15 @@
-"""Shared by the rostest nodes of this folder: recording a topic, TF as matrices, the pad gap."""
+"""The tests' one helper module: free ports, waits that fail loudly, recording a topic, TF as matrices.
+
+The rostest nodes of this folder import it directly; test/view,
+test/reliability and bench/ put this folder on sys.path. Every wait here ends
+in an AssertionError naming what did not happen: none falls through.
+"""
+import signal
+import socket
+import subprocess
 import threading
 import time
+import xmlrpc.client
 
 import numpy as np
 import rospy
@@ -33,13 +42,66 @@ def pad_gap(buffer, fingers, prefix=''):
     return gripper_model.pad_gap(left, right, fingers.pad_thickness)
 
 
-def wait_for_subscribers(publisher, timeout=TIMEOUT):
-    """Until `publisher` has a subscriber; AssertionError after `timeout` s."""
+def free_port():
+    """A TCP port nobody listens on now, e.g. for a rosmaster of one's own."""
+    with socket.socket() as s:
+        s.bind(('localhost', 0))
+        return s.getsockname()[1]
+
+
+def master_pid(uri):
+    """pid of the ROS master at `uri`, None while none answers there."""
+    try:
+        return xmlrpc.client.ServerProxy(uri).getPid('/test')[2]
+    except OSError:
+        return None
+
+
+def stop(process, timeout=30):
+    """SIGINT (what roslaunch and rospy expect), then SIGKILL if it does not go.
+
+    30 s: roslaunch itself gives a node 15 s after SIGINT, then SIGTERM, then
+    SIGKILL; killing roslaunch sooner left a node that hung in shutdown orphaned.
+    """
+    if process is None or process.poll() is not None:
+        return
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+def wait_for(condition, what, timeout=TIMEOUT, step=0.05):
+    """The first true value of `condition()`; after `timeout` s an AssertionError naming `what`
+    (a text, or a function giving it then, e.g. with the end of a log) and the last value."""
     end = time.monotonic() + timeout
-    while publisher.get_num_connections() == 0:
+    while True:
+        value = condition()
+        if value:
+            return value
         if time.monotonic() > end:
-            raise AssertionError('nobody subscribed to %s within %g s' % (publisher.resolved_name, timeout))
-        time.sleep(0.05)
+            raise AssertionError('timed out after %g s waiting for %s (last: %r)' % (
+                timeout, what() if callable(what) else what, value))
+        time.sleep(step)
+
+
+def wait_for_subscribers(publisher, timeout=TIMEOUT):
+    """Until `publisher` has a subscriber (a message sent before that is lost)."""
+    wait_for(publisher.get_num_connections, 'a subscriber of %s' % publisher.resolved_name, timeout)
+
+
+def logs(rosout, node, level, text, since=0.0):
+    """Texts of `node`'s /rosout messages at `level` containing `text`, received since `since`."""
+    return [m.msg for (r, m) in rosout.items_since(since) if m.name == node and m.level == level
+            and text in m.msg]
+
+
+def wait_for_log(rosout, node, level, text, since=0.0, timeout=TIMEOUT):
+    """Until `node` has logged `text` (a Recorder of /rosout). A node's messages arrive in order,
+    so everything it logged before this message has arrived too: count after such a fence."""
+    return wait_for(lambda: logs(rosout, node, level, text, since), '%s to log %r' % (node, text), timeout)
 
 
 class Recorder(object):
@@ -48,21 +110,20 @@ class Recorder(object):
     def __init__(self, topic, msg_type):
         self.items = []
         self.lock = threading.Lock()
+        self.topic = topic
         rospy.Subscriber(topic, msg_type, self._add, queue_size=1000)
 
     def _add(self, msg):
         with self.lock:
             self.items.append((time.monotonic(), msg))
 
-    def since(self, t):
+    def items_since(self, t):
+        """(receipt time, message) pairs received at or after `t`."""
         with self.lock:
-            return [m for (r, m) in self.items if r >= t]
+            return [(r, m) for (r, m) in self.items if r >= t]
+
+    def since(self, t):
+        return [m for (_, m) in self.items_since(t)]
 
     def next_after(self, t, timeout=TIMEOUT):
-        end = time.monotonic() + timeout
-        while time.monotonic() < end:
-            got = self.since(t)
-            if got:
-                return got[0]
-            time.sleep(0.01)
-        raise AssertionError('nothing received within %g s' % timeout)
+        return wait_for(lambda: self.since(t), 'a message on %s' % self.topic, timeout, step=0.01)[0]

@@ -79,10 +79,8 @@ class SimDevicesTest(unittest.TestCase):
                                           Robotiq2FGripper_robot_input, queue_size=300)
         cls.fingers = gripper_model.GripperKinematics(rospy.get_param('robot_description'))
         threading.Thread(target=cls._publish_joints, daemon=True).start()
-        end = time.monotonic() + TIMEOUT  # a command sent before the node listens is lost
         for publisher in (cls.command, cls.holding_command, cls.real_status):
-            while publisher.get_num_connections() == 0 and time.monotonic() < end:
-                time.sleep(0.05)
+            rostest_helpers.wait_for_subscribers(publisher)
 
     @classmethod
     def _publish_joints(cls):
@@ -109,23 +107,21 @@ class SimDevicesTest(unittest.TestCase):
         """Publish `arm`, wait until TF shows it; returns the sensor's orientation in base_link."""
         type(self).arm = list(arm)
         expected = self.model.transform('base_link', SENSOR, dict(zip(ARM, arm)))
-        end = time.monotonic() + TIMEOUT
-        while time.monotonic() < end:
+
+        def shown():
             try:
-                if np.allclose(self.lookup('base_link', SENSOR), expected, atol=1e-6):
-                    return expected[:3, :3]
+                return np.allclose(self.lookup('base_link', SENSOR), expected, atol=1e-6)
             except tf2_ros.TransformException:
-                pass
-            time.sleep(0.02)
-        self.fail('TF never showed the commanded arm pose')
+                return False
+        rostest_helpers.wait_for(shown, 'TF to show the commanded arm pose %s' % arm, step=0.02)
+        return expected[:3, :3]
 
     def reading(self, recorder):
         """The first wrench computed after now (one sensor period of margin)."""
         return wrench_arrays(recorder.next_after(time.monotonic() + 0.05))
 
     def warnings_from(self, node, text):
-        return [m.msg for m in self.rosout.since(0) if m.name == node and m.level == Log.WARN
-                and text in m.msg]
+        return rostest_helpers.logs(self.rosout, node, Log.WARN, text)
 
     # -- ft300_sim -------------------------------------------------------------
 
@@ -201,7 +197,9 @@ class SimDevicesTest(unittest.TestCase):
         for command, res in legacy.items():
             reply = acc(command_id=1, command=command)  # the string wins
             self.assertEqual((reply.success, reply.res), (False, res), command)
-        time.sleep(0.5)  # /rosout delivery
+        # A last unsupported id as a fence: the node's earlier warnings arrive before its warning.
+        acc(command_id=254, command='')
+        rostest_helpers.wait_for_log(self.rosout, '/robotiq_ft_sensor', Log.WARN, "Unsupported command_id '254'")
         deprecated = self.warnings_from('/robotiq_ft_sensor', 'command-string is deprecated')
         self.assertEqual(len(deprecated), 1, deprecated)
         unsupported = self.warnings_from('/robotiq_ft_sensor', "Unsupported command_id '3'")
@@ -217,11 +215,15 @@ class SimDevicesTest(unittest.TestCase):
                 'ur3_ft_gripper_description', 'ft300_sim', name='robotiq_ft_sensor', namespace='/no_tf/'))
             acc = rospy.ServiceProxy('no_tf/robotiq_ft_sensor_acc', sensor_accessor)
             acc.wait_for_service(TIMEOUT)
-            time.sleep(4.0)
+            time.sleep(4.0)  # a window to observe: no wrench, and no second warning
             self.assertTrue(process.is_alive())
             self.assertEqual(acc(command_id=1, command='').res, 'SIM-0000')  # serving meanwhile
             self.assertEqual(self.no_tf.since(0), [])
             self.assertEqual(self.no_tf_stream.since(0), [])
+            # An unsupported id as a fence: the node's earlier warnings arrive before its warning.
+            acc(command_id=254, command='')
+            rostest_helpers.wait_for_log(self.rosout, '/no_tf/robotiq_ft_sensor', Log.WARN,
+                                         "Unsupported command_id '254'")
             warnings = self.warnings_from('/no_tf/robotiq_ft_sensor', 'waiting for TF')
             self.assertEqual(len(warnings), 1, warnings)
             self.assertIn('no_such_sensor_frame', warnings[0])
@@ -238,7 +240,9 @@ class SimDevicesTest(unittest.TestCase):
             self.assertEqual(self.wrench.since(quiet_since), [], 'published for a stale pose')
         finally:
             self.publishing.set()
-        self.wrench.next_after(time.monotonic())  # resumes
+        # Resumed, and said so: every warning before that message has arrived.
+        self.wrench.next_after(time.monotonic())
+        rostest_helpers.wait_for_log(self.rosout, '/robotiq_ft_sensor', Log.INFO, 'robotiq_ft_wrench at', quiet_since)
         warnings = self.warnings_from('/robotiq_ft_sensor', 's old')
         self.assertEqual(len(warnings), 1, [(m.level, m.msg) for m in self.rosout.since(0)
                                             if m.name == '/robotiq_ft_sensor'])
@@ -246,12 +250,8 @@ class SimDevicesTest(unittest.TestCase):
     # -- gripper_sim and gripper_joint_states ---------------------------------------
 
     def wait_status(self, recorder, check):
-        end = time.monotonic() + TIMEOUT
-        while time.monotonic() < end:
-            msg = recorder.next_after(time.monotonic())
-            if check(msg):
-                return msg
-        self.fail('the gripper status never matched; last: %s' % msg)
+        return rostest_helpers.wait_for(lambda: (lambda msg: msg if check(msg) else None)(
+            recorder.next_after(time.monotonic())), 'a gripper status that matches', step=0)
 
     def activate(self, publisher, recorder):
         publisher.publish(Robotiq2FGripper_robot_output())
@@ -266,7 +266,7 @@ class SimDevicesTest(unittest.TestCase):
         self.wait_status(self.gripper_status, lambda s: s.gPO == 230 and s.gOBJ == 3)
         scale = gripper_model.RegisterScale(0.140, 3, 230)  # config/sim_devices.yaml
         moving = [(r, scale.opening(m.gPO))
-                  for (r, m) in self.gripper_status.items if r >= t0 and 20 < m.gPO < 210]
+                  for (r, m) in self.gripper_status.items_since(t0) if 20 < m.gPO < 210]
         self.assertGreater(len(moving), 10)
         slope = np.polyfit([r for r, _ in moving], [o for _, o in moving], 1)[0]
         self.assertAlmostEqual(slope, -0.250, delta=0.04)  # m/s, the 2F-140's top speed at rSP 255
@@ -288,7 +288,9 @@ class SimDevicesTest(unittest.TestCase):
         for _ in range(50):
             self.command.publish(Robotiq2FGripper_robot_output(rACT=5, rGTO=9, rPR=100, rSP=255, rFR=150))
         self.wait_status(self.gripper_status, lambda s: s.gPO == 100 and s.gOBJ == 3)
-        time.sleep(0.5)  # /rosout delivery
+        # A reset with a nonsense rATR as a fence: the node's earlier warnings arrive before its warning.
+        self.command.publish(Robotiq2FGripper_robot_output(rATR=2))
+        rostest_helpers.wait_for_log(self.rosout, '/robotiq2FGripper', Log.WARN, 'rATR=2')
         for register in ('rACT=5', 'rGTO=9'):
             warnings = self.warnings_from('/robotiq2FGripper', register)
             self.assertEqual(len(warnings), 1, warnings)

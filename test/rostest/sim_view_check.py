@@ -1,6 +1,5 @@
 #!/usr/bin/env python3
 """rostest node: in view_ur3_ft_gripper.launch, the simulated devices reach TF and RViz's topics."""
-import time
 import unittest
 
 import numpy as np
@@ -45,18 +44,11 @@ class SimViewTest(unittest.TestCase):
     def settle(self, rpr, gpo):
         """Send rPR; wait for gPO and for TF to show the angle gripper_joint_states gives for it."""
         self.command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=rpr, rSP=255, rFR=150))
-        end = time.monotonic() + TIMEOUT
-        while time.monotonic() < end:
-            s = self.status()
-            if s.gSTA == 3 and s.gPO == gpo and s.gOBJ == 3:
-                break
-        else:
-            self.fail('gPO never reached %d' % gpo)
+        rostest_helpers.wait_for(lambda: (lambda s: s.gSTA == 3 and s.gPO == gpo and s.gOBJ == 3)(self.status()),
+                                 'gPO %d' % gpo, step=0)
         target = rospy.wait_for_message('gripper/joint_states', JointState, TIMEOUT).position[0]
-        while time.monotonic() < end:
-            if abs(self.finger_angle() - target) < 1e-9:
-                return
-        self.fail('joint_states never showed finger_joint %g' % target)
+        rostest_helpers.wait_for(lambda: abs(self.finger_angle() - target) < 1e-9,
+                                 'finger_joint %g in joint_states' % target, step=0)
 
     def test_wrench_is_in_the_prefixed_sensor_frame(self):
         msg = rospy.wait_for_message('robotiq_ft_wrench', WrenchStamped, TIMEOUT)

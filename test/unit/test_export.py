@@ -85,12 +85,12 @@ def test_help_documents_every_option():
 
 
 @pytest.mark.parametrize('options,words', [
-    (['--ur-type', 'ur7'], ["ur_type 'ur7'", 'ur3, ur3e, ur5, ur5e, ur10, ur10e, ur16e, ur20, ur30']),
+    (['--ur-type', 'ur7'], ['config/ur7/joint_limits.yaml', 'ur3, ur3e, ur5, ur5e, ur10, ur10e, ur16e, ur20, ur30']),
     (['--kinematics-params', '/nonexistent/calibration.yaml'],
-     ['kinematics_params: file not found', '--kinematics-params <path']),
+     ['No such file or directory', '/nonexistent/calibration.yaml']),
     (['--no-such-option'], ['unrecognized arguments: --no-such-option', '--help']),
     (['--ur-type'], ['--ur-type', 'expected one argument']),
-    (['--prefix', 'arm-1_'], ['prefix', 'TF frame']),
+    (['--prefix', 'arm-1_'], ["'arm-1_base_link'", 'TF frame name']),
 ])
 def test_bad_options_are_one_line_and_write_nothing(tmp_path, options, words):
     out = tmp_path / 'model.urdf'

@@ -1,8 +1,15 @@
-"""Every argument of the load launch reaches the model from the view launches too."""
+"""Every argument of the load launch reaches the model from the view launches too; every package
+the launch files name is declared."""
+import glob
+import os
 import re
 import subprocess
+import xml.etree.ElementTree as ElementTree
 
 import pytest
+from catkin_pkg.package import parse_package
+
+from conftest import PACKAGE_DIR
 
 PACKAGE = 'ur3_ft_gripper_description'
 # Each view launch with the arguments it requires.
@@ -40,3 +47,18 @@ def test_view_launch_passes_transmission_and_safety_arguments_to_the_model(view)
     assert 'hardware_interface/PositionJointInterface' not in text
     assert 'k_position=\\"33\\"' in text
     assert 'soft_lower_limit=\\"-6.03318530' in text  # -2 pi + the margin 0.25
+
+
+def test_every_package_a_launch_file_names_is_a_run_dependency():
+    # package.xml keeps only what runs the model, the launch files and the
+    # nodes; a package named by a launch file must stay among them.
+    declared = {d.name for d in parse_package(PACKAGE_DIR).exec_depends}
+    named = {}
+    for path in glob.glob(os.path.join(PACKAGE_DIR, 'launch', '**', '*.launch'), recursive=True):
+        for element in ElementTree.parse(path).iter():
+            packages = [element.get('pkg')] + re.findall(r'\$\(find (\w+)\)', ' '.join(element.attrib.values()))
+            for package in filter(None, packages):
+                named.setdefault(package, os.path.basename(path))
+    assert 'ur_robot_driver' in named and 'rviz' in named  # the parse found the bring-up and the view
+    undeclared = {p: f for p, f in named.items() if p != PACKAGE and p not in declared}
+    assert not undeclared, 'named in launch files, not exec_depend in package.xml: %s' % undeclared

@@ -174,8 +174,7 @@ def test_register_scale_rejects_impossible_calibrations(args):
 
 
 def test_every_register_value_maps_to_the_pad_gap_it_stands_for(default_model):
-    fingers = gripper_model.GripperKinematics(default_model.text,
-                                              samples=gripper_joint_states.ANGLE_TABLE_SAMPLES)
+    fingers = gripper_model.GripperKinematics(default_model.text)
     scale = gripper_model.RegisterScale(0.140, 3, 230)
     table = gripper_joint_states.JointTable(fingers, scale)
     assert table.joint_name == 'finger_joint'

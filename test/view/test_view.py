@@ -1,13 +1,12 @@
 """The README's view command without a display, as CI's proof that it works.
 
-`tools/quickstart view` runs `rosrun ur3_ft_gripper_description view_screenshot`
-when there is no display; these tests run that same command, or its
-HeadlessView, each on its own ROS master (roslaunch starts it on a free port).
+`tools/quickstart view` runs `tools/headless_view.py` when there is no
+display; these tests run that same command, or its HeadlessView, each on its
+own ROS master (roslaunch starts it on a free port).
 """
 import os
 import subprocess
 import sys
-import time
 
 import numpy as np
 import pytest
@@ -16,15 +15,15 @@ import tf2_ros
 import yaml
 from sensor_msgs.msg import JointState
 
-from ur3_ft_gripper_description import headless_view, kinematics
+from ur3_ft_gripper_description import kinematics
 
 PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'bench'))
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'tools'))
 sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-import benchlib  # noqa: E402  (one way to find a free port)
-import rostest_helpers  # noqa: E402  (TF lookups as matrices)
+import headless_view  # noqa: E402  (the tool under test)
+import rostest_helpers  # noqa: E402  (the tests' one helper module)
 
-VIEW_COMMAND = ['rosrun', 'ur3_ft_gripper_description', 'view_screenshot']
+VIEW_COMMAND = [sys.executable, os.path.join(PACKAGE_DIR, 'tools', 'headless_view.py')]
 SETTINGS = headless_view.settings()
 SCREEN = (SETTINGS['screen_width'], SETTINGS['screen_height'])
 # The joint the slider test moves, and the links it moves and does not move.
@@ -36,7 +35,7 @@ TIMEOUT = 60.0
 
 
 def own_master_env():
-    return dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % benchlib.free_port())
+    return dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % rostest_helpers.free_port())
 
 
 def run_view(tmp_path, *args):
@@ -59,38 +58,32 @@ def test_rviz_dying_from_a_signal_at_start_up_is_started_once_more(tmp_path):
     view = subprocess.Popen(VIEW_COMMAND + ['--output', shot, '--log', log], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, universal_newlines=True, env=own_master_env())
     try:
-        deadline = time.monotonic() + TIMEOUT
-        rviz = ''
-        while not rviz and time.monotonic() < deadline:
-            rviz = subprocess.run(['pgrep', '-P', str(launch_pid(view.pid)), '-f', '/rviz '],
-                                  stdout=subprocess.PIPE, universal_newlines=True).stdout.split()
-            time.sleep(0.1)
-        assert rviz, 'RViz did not start'
+        launch = launch_pid(view.pid)
+        rviz = rostest_helpers.wait_for(
+            lambda: subprocess.run(['pgrep', '-P', str(launch), '-f', '/rviz '], stdout=subprocess.PIPE,
+                                   universal_newlines=True).stdout.split(), 'RViz to start', TIMEOUT, step=0.1)
         os.kill(int(rviz[0]), 11)  # SIGSEGV, as the crash
         out, err = view.communicate(timeout=900)
     finally:
         if view.poll() is None:
             view.kill()
-    assert view.returncode == 0, 'view_screenshot failed: %s\n%s' % (err, log_tail(log))
+    assert view.returncode == 0, 'headless_view failed: %s\n%s' % (err, log_tail(log))
     assert err.count('RViz died at start-up (signal 11)') == 1, err
     assert out.strip() == 'screenshot: %s' % shot
 
 
 def launch_pid(view_pid):
-    """The roslaunch that view_screenshot started (its child), once it runs."""
-    deadline = time.monotonic() + TIMEOUT
-    while time.monotonic() < deadline:
-        found = subprocess.run(['pgrep', '-P', str(view_pid), '-f', 'roslaunch'], stdout=subprocess.PIPE,
-                               universal_newlines=True).stdout.split()
-        if found:
-            return int(found[0])
-        time.sleep(0.1)
-    raise AssertionError('view_screenshot started no roslaunch')
+    """The roslaunch that headless_view started (its child), once it runs."""
+    found = rostest_helpers.wait_for(
+        lambda: subprocess.run(['pgrep', '-P', str(view_pid), '-f', 'roslaunch'], stdout=subprocess.PIPE,
+                               universal_newlines=True).stdout.split(), 'headless_view to start roslaunch',
+        TIMEOUT, step=0.1)
+    return int(found[0])
 
 
 def test_view_command_saves_a_screenshot_that_shows_the_robot(tmp_path):
     status, out, err, shot, log = run_view(tmp_path)
-    assert status == 0, 'view_screenshot failed: %s\n%s' % (err, log_tail(log))
+    assert status == 0, 'headless_view failed: %s\n%s' % (err, log_tail(log))
     assert out.strip() == 'screenshot: %s' % shot
     assert os.path.isfile(shot)
     verdict = headless_view.check_screenshot(shot)
@@ -111,8 +104,8 @@ def test_a_screenshot_of_rviz_without_the_robot_fails_the_check(tmp_path):
     empty = tmp_path / 'no_robot_model.rviz'
     empty.write_text(yaml.safe_dump(config))
     status, out, err, shot, log = run_view(tmp_path, '--robot-timeout', '30', 'rviz_config:=%s' % empty)
-    assert status == 1, 'view_screenshot passed without the robot: %s' % out
-    assert err.strip().splitlines()[-1].startswith('view_screenshot: error: the robot did not show in RViz'), err
+    assert status == 1, 'headless_view passed without the robot: %s' % out
+    assert err.strip().splitlines()[-1].startswith('headless_view: error: the robot did not show in RViz'), err
     verdict = headless_view.check_screenshot(shot, str(empty))
     assert verdict.size == SCREEN
     # A live 3D view: the grid is drawn and the simulated FT 300's wrench arrow
@@ -126,16 +119,6 @@ def test_a_screenshot_of_rviz_without_the_robot_fails_the_check(tmp_path):
 def joint_positions():
     msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)
     return msg.name, dict(zip(msg.name, msg.position))
-
-
-def wait_until(predicate, what):
-    end = time.monotonic() + TIMEOUT
-    while time.monotonic() < end:
-        value = predicate()
-        if value:
-            return value
-        time.sleep(0.1)
-    pytest.fail('timed out after %g s waiting for %s' % (TIMEOUT, what))
 
 
 def test_a_slider_moved_with_the_keyboard_moves_the_arm_in_joint_states_and_tf(tmp_path):
@@ -171,13 +154,14 @@ def test_a_slider_moved_with_the_keyboard_moves_the_arm_in_joint_states_and_tf(t
         def at_limit():
             positions = joint_positions()[1]
             return positions if abs(positions[JOINT] - upper) < 1e-3 else None
-        after = wait_until(at_limit, '%s at its upper limit %g in joint_states' % (JOINT, upper))
+        after = rostest_helpers.wait_for(at_limit, '%s at its upper limit %g in joint_states' % (JOINT, upper),
+                                         TIMEOUT, step=0.1)
         for name in free:
             if name not in (JOINT, 'finger_joint'):
                 assert after[name] == pytest.approx(before[name], abs=1e-6), '%s moved too' % name
         expected = {link: model.transform('base_link', link, after) for link in MOVED + STILL}
-        wait_until(lambda: np.allclose(tf('forearm_link'), expected['forearm_link'], atol=1e-4),
-                   'TF of forearm_link with %s at %g' % (JOINT, upper))
+        rostest_helpers.wait_for(lambda: np.allclose(tf('forearm_link'), expected['forearm_link'], atol=1e-4),
+                                 'TF of forearm_link with %s at %g' % (JOINT, upper), TIMEOUT, step=0.1)
         for link in MOVED:
             moved = tf(link)
             assert np.allclose(moved, expected[link], atol=1e-4), '%s in TF is not where the model puts it' % link

@@ -24,10 +24,6 @@ Private parameters:
 
 from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 
-# Samples of the finger angle table: interpolation in it is within 1e-6 rad of
-# the exact inverse (test_sim_models checks it).
-ANGLE_TABLE_SAMPLES = 4001
-
 
 def scale_from_params(get_param):
     """The unit's RegisterScale from ~gpo_open, ~gpo_closed and ~devices_file; ParamError if bad."""
@@ -47,7 +43,7 @@ class JointTable(object):
 
     def __init__(self, fingers, scale):
         self.joint_name = fingers.joint_name
-        self.angles = [fingers.table_angle(scale.opening(gpo)) for gpo in range(256)]
+        self.angles = [fingers.angle(scale.opening(gpo)) for gpo in range(256)]
 
     def angle(self, gpo):
         return self.angles[min(max(int(gpo), 0), 255)]
@@ -71,8 +67,7 @@ def run(rospy):
     if description is None:
         return 0
     try:
-        fingers = gripper_model.GripperKinematics(description, prefix=prefix,
-                                                  samples=ANGLE_TABLE_SAMPLES)
+        fingers = gripper_model.GripperKinematics(description, prefix=prefix)
     except ValueError as exc:
         rospy.logfatal('%s: robot_description has no usable 2F-140 (%s); check ~prefix', name, exc)
         return 1

@@ -112,10 +112,7 @@ def export_urdf_main(argv=None):
     try:
         _write(export.export_urdf(mappings, absolute=args.absolute_meshes), args.output)
     except description.DescriptionError as e:
-        message = str(e)
-        for name in description.PARAMETER_FILE_ARGS:  # name the fix in this command's syntax
-            message = message.replace('%s:=' % name, '--%s ' % name.replace('_', '-'))
-        print('export_urdf: error: %s' % message, file=sys.stderr)
+        print('export_urdf: error: %s' % e, file=sys.stderr)
         return 1
     except OSError as e:
         print('export_urdf: error: %s' % e, file=sys.stderr)

@@ -1,42 +1,28 @@
 """Expand xacro into a checked URDF, with one-line errors for bad input.
 
 This is the engine behind `expand_description` (a drop-in for the xacro
-command) and the launch files. It runs the real xacro on the real upstream
-files and then:
+command) and the launch files, in three steps:
 
-* removes the extra ``<prefix>base_link`` and its joint that the jr-robotics
-  Noetic fork of the 2F-140 macro emits (they collide with the arm's root);
-* refuses to return a model that is not one tree (duplicate names, dangling
-  joints, several roots), so that ``robot_description`` is never half-built.
+1. xacro: the installed ROS 1 xacro reads the xacro files, the arguments and
+   the parameter files by its own rules; whatever it rejects becomes one
+   line naming the file and xacro's own words for the problem;
+2. fix-ups of what xacro produced: the extra ``<prefix>base_link`` and its
+   joint that the jr-robotics Noetic fork of the 2F-140 macro emits (they
+   collide with the arm's root) are removed;
+3. checks: a model that is not one tree with TF-valid names is refused, so
+   that ``robot_description`` is never half-built.
 """
 
 import os
 import re
 import subprocess
 
-import yaml
-
-# Package -> how a user gets it; used in "package not found" errors.
-PACKAGE_SOURCES = {
-    'ur_description': 'sudo apt install ros-noetic-ur-description, or clone '
-                      'ros-industrial/universal_robot (see repos/robotiq-noetic.repos)',
-    'robotiq_ft_sensor': 'clone ros-industrial/robotiq or jr-robotics/robotiq into your '
-                         'catkin workspace (see repos/robotiq-noetic.repos)',
-    'robotiq_2f_140_gripper_visualization': 'clone ros-industrial/robotiq or jr-robotics/robotiq '
-                                            'into your catkin workspace '
-                                            '(see repos/robotiq-noetic.repos)',
-}
-MODEL_PACKAGES = ('ur_description', 'robotiq_ft_sensor', 'robotiq_2f_140_gripper_visualization')
-
 # Names both upstream 2F-140 macros give (before the prefix).
 GRIPPER_BASE = 'robotiq_arg2f_base_link'
 FINGER_JOINT = 'finger_joint'
 PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
-
-# Top-level xacro args that name UR parameter files, with the keys the UR
-# macro reads from each (ur_description/urdf/inc/ur_common.xacro).
-UR_JOINTS = ('shoulder_pan', 'shoulder_lift', 'elbow_joint', 'wrist_1', 'wrist_2', 'wrist_3')
-UR_KINEMATIC_SEGMENTS = ('shoulder', 'upper_arm', 'forearm', 'wrist_1', 'wrist_2', 'wrist_3')
+# The upstream packages whose files and meshes the model uses.
+MODEL_PACKAGES = ('ur_description', 'robotiq_ft_sensor', 'robotiq_2f_140_gripper_visualization')
 # The file in ur_description/config/<ur_type>/ that each arg defaults to (in the macro).
 UR_DEFAULT_FILES = {
     'joint_limit_params': 'joint_limits.yaml',
@@ -44,42 +30,13 @@ UR_DEFAULT_FILES = {
     'physical_params': 'physical_parameters.yaml',
     'visual_params': 'visual_parameters.yaml',
 }
-PARAMETER_FILE_ARGS = {
-    'joint_limit_params': ('joint_limits', UR_JOINTS),
-    'kinematics_params': ('kinematics', UR_KINEMATIC_SEGMENTS),
-    'physical_params': ('dh_parameters', ()),
-    'visual_params': ('mesh_files', ()),
-}
-
-
-# Top-level xacro args that must be true or false.
-BOOLEAN_ARGS = ('ft_sensor', 'gripper', 'world', 'safety_limits')
-BOOLEAN_VALUES = ('true', 'false', 'True', 'False', '1', '0')
 
 # A TF frame name: segments of letters, digits and '_', separated by '/'.
 FRAME_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$')
 
 
-class _ParameterFileLoader(yaml.SafeLoader):
-    """YAML as xacro.load_yaml reads it: ur_description's limits use !degrees."""
-
-
-_ParameterFileLoader.add_constructor(
-    '!degrees', lambda loader, node: float(loader.construct_scalar(node)) * 3.141592653589793 / 180.0)
-_ParameterFileLoader.add_constructor(
-    '!radians', lambda loader, node: float(loader.construct_scalar(node)))
-
-
 class DescriptionError(Exception):
     """Bad input or environment; the message is one line naming problem and fix."""
-
-
-def check_prefix(prefix):
-    """A prefix must turn every link name into a valid TF frame name."""
-    if prefix and not FRAME_NAME.match(prefix + 'base_link'):
-        raise DescriptionError(
-            "prefix %r cannot start a TF frame name: use letters, digits, '_' and '/' "
-            "(not first), e.g. prefix:=left_ or prefix:=robot1/" % prefix)
 
 
 def ur_types(rospack=None):
@@ -95,135 +52,62 @@ def ur_types(rospack=None):
                                             for part in re.split(r'(\d+)', name)])
 
 
-def unknown_ur_type_error(ur_type, rospack=None):
-    return DescriptionError(
-        "ur_type %r is not a UR model that the installed ur_description ships: use one of %s"
-        % (ur_type, ', '.join(ur_types(rospack))))
-
-
-def check_ur_type(ur_type):
-    if ur_type not in ur_types():
-        raise unknown_ur_type_error(ur_type)
-
-
-def check_boolean(arg, value):
-    if str(value) not in BOOLEAN_VALUES:
-        raise DescriptionError('%s:=%r is not a boolean: use %s:=true or %s:=false' % (
-            arg, value, arg, arg))
-
-
-def _rospack():
-    import rospkg
-    return rospkg.RosPack()
-
-
 def package_path(name, rospack=None):
-    """Path of ROS package `name`, or DescriptionError saying how to get it."""
+    """Path of ROS package `name`, or DescriptionError naming it."""
     import rospkg
     try:
-        return (rospack or _rospack()).get_path(name)
+        return (rospack or rospkg.RosPack()).get_path(name)
     except rospkg.ResourceNotFound:
-        how = PACKAGE_SOURCES.get(name, 'install it or add its folder to ROS_PACKAGE_PATH')
         raise DescriptionError(
-            "ROS package '%s' not found on ROS_PACKAGE_PATH: %s" % (name, how)) from None
+            "ROS package '%s' not found on ROS_PACKAGE_PATH: install it or add its folder there" % name) from None
 
 
-def check_model_packages():
-    """Fail early and clearly if an upstream package of the model is missing."""
-    rospack = _rospack()
-    for name in MODEL_PACKAGES:
-        package_path(name, rospack)
-    urdf_dir = os.path.join(package_path('robotiq_2f_140_gripper_visualization', rospack), 'urdf')
-    if not any(os.path.isfile(os.path.join(urdf_dir, f)) for f in
-               ('robotiq_arg2f_140_model_macro.xacro', 'robotiq_arg2f_140_macro.xacro')):
-        raise DescriptionError(
-            "no 2F-140 macro (robotiq_arg2f_140_model_macro.xacro or robotiq_arg2f_140_macro.xacro) "
-            "in %s: use the ros-industrial/robotiq or jr-robotics/robotiq package" % urdf_dir)
+def _causes(exc):
+    """`exc` and the exceptions it was raised while handling."""
+    while exc is not None:
+        yield exc
+        exc = exc.__cause__ or exc.__context__
 
 
-def check_parameter_file(arg, path):
-    """Check one UR parameter file before xacro reads it."""
-    if arg not in PARAMETER_FILE_ARGS or path == '':
-        return
-    section, required = PARAMETER_FILE_ARGS[arg]
-    fix = 'give %s:=<path to a YAML file like ur_description/config/ur3/%s>' % (
-        arg, UR_DEFAULT_FILES[arg])
-    if not os.path.isfile(path):
-        raise DescriptionError('%s: file not found: %s; %s' % (arg, path, fix))
-    try:
-        with open(path) as f:
-            data = yaml.load(f, Loader=_ParameterFileLoader)
-    except yaml.YAMLError as e:
-        where = getattr(e, 'problem_mark', None)
-        line = ' (line %d)' % (where.line + 1) if where else ''
-        raise DescriptionError('%s: %s is not valid YAML%s; %s' % (arg, path, line, fix)) from None
-    if data is None:
-        raise DescriptionError('%s: %s is empty; %s' % (arg, path, fix))
-    if not isinstance(data, dict) or section not in data:
-        raise DescriptionError("%s: %s has no '%s' section; %s" % (arg, path, section, fix))
-    missing = [k for k in required if k not in (data[section] or {})]
-    if missing:
-        raise DescriptionError("%s: %s has no entry for %s in '%s'; %s" % (
-            arg, path, ', '.join(missing), section, fix))
+def _ur_type_hint(exc):
+    """'; the installed ur_description has the models ur3, ...' when xacro lacked one of their files."""
+    for cause in _causes(exc):
+        if isinstance(cause, FileNotFoundError) and cause.filename:
+            try:
+                config = os.path.realpath(os.path.join(package_path('ur_description'), 'config'))
+            except DescriptionError:
+                return ''
+            path = os.path.realpath(cause.filename)
+            if path.startswith(config + os.sep) and os.path.basename(path) in UR_DEFAULT_FILES.values():
+                return '; the installed ur_description has the models %s' % ', '.join(ur_types())
+    return ''
 
 
-def load_xacro():
-    """The ROS 1 xacro module; its `$(find pkg)` goes through roslaunch and ROS_PACKAGE_PATH."""
+def xacro_failure(xacro_file, exc):
+    """One line for what xacro rejected: the file, then xacro's words for the problem.
+
+    xacro's message is the problem (a YAML error takes several lines), then
+    one line per expression it was evaluating, innermost first: the problem
+    and the innermost expression say what and where.
+    """
+    lines = [' '.join(line.split()) for line in str(exc).splitlines() if line.strip()]
+    context = [i for i, line in enumerate(lines) if line.startswith('when ')]
+    problem = ' '.join(lines[:context[0] + 1] if context else lines) or type(exc).__name__
+    return '%s: %s%s' % (xacro_file, problem, _ur_type_hint(exc))
+
+
+def run_xacro(xacro_file, mappings=None):
+    """The installed xacro on `xacro_file` with `mappings` (its args); returns the minidom document."""
     try:
         import xacro
     except ImportError:
         raise DescriptionError(
             'xacro is not installed: sudo apt install ros-noetic-xacro, or build ros/xacro '
             '(noetic-devel) in your catkin workspace and source it') from None
-    if not hasattr(xacro, 'load_yaml'):
-        raise DescriptionError(
-            'this xacro has no xacro.load_yaml, which ur_description needs: install '
-            'ros-noetic-xacro >= 1.14.10')
-    return xacro
-
-
-def _causes(exc):
-    """`exc` and the exceptions behind it (xacro wraps them in XacroException.exc)."""
-    seen = set()
-    while exc is not None and id(exc) not in seen:
-        yield exc
-        seen.add(id(exc))
-        exc = getattr(exc, 'exc', None) or exc.__cause__ or exc.__context__
-
-
-def _explain(exc):
-    """The one-line DescriptionError for a xacro failure whose cause we know, else None."""
-    for cause in _causes(exc):
-        if isinstance(cause, DescriptionError):
-            return cause
-        if isinstance(cause, FileNotFoundError) and cause.filename:
-            # The macro's default parameter file of a ur_type that ur_description lacks.
-            folder, name = os.path.split(os.path.realpath(cause.filename))
-            config = os.path.realpath(os.path.join(package_path('ur_description'), 'config'))
-            model = os.path.basename(folder)
-            if (os.path.dirname(folder) == config and name in UR_DEFAULT_FILES.values()
-                    and model not in ur_types()):
-                return unknown_ur_type_error(model)
-    return None
-
-
-def run_xacro(xacro_file, mappings=None):
-    """Run xacro on `xacro_file`; returns the minidom document."""
-    mappings = dict(mappings or {})
-    if not os.path.isfile(xacro_file):
-        raise DescriptionError('xacro file not found: %s' % xacro_file)
-    for arg, value in mappings.items():
-        check_parameter_file(arg, value)
-    check_prefix(mappings.get('prefix', ''))
-    xacro = load_xacro()
     try:
-        return xacro.process_file(xacro_file, mappings=mappings)
-    except Exception as e:  # xacro raises many types; all become one line
-        known = _explain(e)
-        if known is not None:
-            raise known from None
-        text = ' '.join(str(e).split()) or type(e).__name__
-        raise DescriptionError('xacro failed on %s: %s' % (xacro_file, text)) from None
+        return xacro.process_file(xacro_file, mappings=dict(mappings or {}))
+    except Exception as e:  # xacro raises many types; each becomes one line
+        raise DescriptionError(xacro_failure(xacro_file, e)) from None
 
 
 def _elements(robot, tag):
@@ -306,14 +190,7 @@ def expand(xacro_file, mappings=None):
 
 
 def expand_model(mappings=None, xacro_file=None):
-    """The package's own top-level model, with the upstream packages and its args checked first."""
-    check_model_packages()
-    mappings = dict(mappings or {})
-    if 'ur_type' in mappings:
-        check_ur_type(mappings['ur_type'])
-    for arg in BOOLEAN_ARGS:
-        if arg in mappings:
-            check_boolean(arg, mappings[arg])
+    """The package's own top-level model (urdf/ur3_ft_gripper.xacro) for `mappings`."""
     if xacro_file is None:
         xacro_file = os.path.join(package_path('ur3_ft_gripper_description'),
                                   'urdf', 'ur3_ft_gripper.xacro')

@@ -1,9 +1,14 @@
+#!/usr/bin/env python3
 """RViz without a display: Xvfb, the view launch, the joint sliders beside RViz, a screenshot.
 
-`tools/quickstart view` runs this through scripts/view_screenshot when there is
-no display, and test/view uses the same HeadlessView, so CI exercises the code
-path of the README's view command. `check_screenshot` says whether a
-screenshot's 3D view holds the robot.
+A tool of this repository, not of the installed package: `tools/quickstart
+view` runs it when there is no display, and test/view uses the same
+HeadlessView, so CI exercises the code path of the README's view command.
+`check_screenshot` says whether a screenshot's 3D view holds the robot. Its
+programs (Xvfb, xdotool, ImageMagick's import, Pillow) are test dependencies
+that tools/quickstart installs.
+
+    python3 tools/headless_view.py -o view.png [--log FILE] [-- name:=value ...]
 """
 import collections
 import os
@@ -47,17 +52,13 @@ class RvizCrashed(ViewError):
 NODE_DIED = re.compile(r'process has died \[pid \d+, exit code (-\d+), cmd \S*/rviz ')
 
 
-def package_path(*parts):
-    return os.path.join(rospkg.RosPack().get_path(PACKAGE), *parts)
-
-
 def settings():
-    with open(package_path('config', 'headless_view.yaml')) as f:
+    with open(os.path.join(os.path.dirname(os.path.abspath(__file__)), 'headless_view.yaml')) as f:
         return yaml.safe_load(f)
 
 
 def default_rviz_config():
-    return package_path('rviz', 'view_ur3_ft_gripper.rviz')
+    return os.path.join(rospkg.RosPack().get_path(PACKAGE), 'rviz', 'view_ur3_ft_gripper.rviz')
 
 
 def _colour(text):
@@ -161,7 +162,7 @@ class HeadlessView(object):
         try:
             self._open()
         except RvizCrashed as crash:
-            print('[view_screenshot] %s; starting the view once more' % crash, file=sys.stderr)
+            print('[headless_view] %s; starting the view once more' % crash, file=sys.stderr)
             self._stop_launch()  # the same Xvfb serves the second start
             self.rviz_window = self.sliders_window = None
             self._open()
@@ -243,7 +244,7 @@ class HeadlessView(object):
         """Save a screenshot once the robot shows and its meshes have loaded; the Verdict.
 
         Raises ViewError if the robot does not show within `timeout` (default
-        from config/headless_view.yaml); the last screenshot is in `path` then.
+        from tools/headless_view.yaml); the last screenshot is in `path` then.
         """
         timeout = self.settings['robot_timeout'] if timeout is None else timeout
         deadline = time.monotonic() + timeout
@@ -292,9 +293,9 @@ class HeadlessView(object):
 
 
 def main(argv=None):
-    from .model.cli import OneLineParser
+    from ur3_ft_gripper_description.model.cli import OneLineParser
     parser = OneLineParser(
-        prog='view_screenshot',
+        prog='headless_view',
         description='Run the view launch under Xvfb (no display needed), move the joint sliders '
                     'beside RViz, and save a screenshot once the robot shows. Prints '
                     '"screenshot: <path>"; exit status 1 with one error line if RViz or the robot '
@@ -302,7 +303,7 @@ def main(argv=None):
     parser.add_argument('-o', '--output', required=True, help='PNG file to write')
     parser.add_argument('--log', default=os.devnull, help="file for roslaunch's and Xvfb's output")
     parser.add_argument('--robot-timeout', type=float, default=None,
-                        help='seconds to wait for the robot (default: config/headless_view.yaml)')
+                        help='seconds to wait for the robot (default: tools/headless_view.yaml)')
     parser.add_argument('launch_args', nargs='*', metavar='name:=value',
                         help='arguments of view_ur3_ft_gripper.launch')
     args = parser.parse_args(argv)
@@ -313,13 +314,17 @@ def main(argv=None):
         with HeadlessView(args.launch_args, args.log) as view:
             start = time.monotonic()
             view.open()
-            print('[view_screenshot] RViz up under Xvfb (%s) after %.0f s; waiting for the robot to show'
+            print('[headless_view] RViz up under Xvfb (%s) after %.0f s; waiting for the robot to show'
                   % (view.display, time.monotonic() - start), file=sys.stderr)
             start = time.monotonic()
             view.screenshot(output, args.robot_timeout)
-            print('[view_screenshot] the robot showed after %.0f s' % (time.monotonic() - start), file=sys.stderr)
+            print('[headless_view] the robot showed after %.0f s' % (time.monotonic() - start), file=sys.stderr)
     except ViewError as e:
-        print('view_screenshot: error: %s' % e, file=sys.stderr)
+        print('headless_view: error: %s' % e, file=sys.stderr)
         return 1
     print('screenshot: %s' % output)
     return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
