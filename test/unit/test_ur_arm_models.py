@@ -304,6 +304,8 @@ def test_slider_and_io():
     assert robot.set_io(1, 2, 1.0)[0] and robot.digital_out[2]
     assert not robot.set_io(1, 18, 1.0)[0]
     assert not robot.set_io(9, 0, 1.0)[0]
+    assert not robot.set_io(2, 0, 1.0)[0]  # FUN_SET_FLAG: not implemented by ur_robot_driver
+    assert robot.set_io(1, 5, 0.5)[0] and robot.digital_out[5]  # sent as a bool
     assert robot.set_io(4, 0, 24.0)[0] and robot.tool_voltage == 24
 
 
@@ -316,6 +318,7 @@ def test_script_and_resend_in_headless_mode():
     assert not robot.program_running
     assert robot.resend_robot_program()[0] and robot.program_running
     assert robot.hand_back_control()[0] and not robot.program_running
+    assert robot.hand_back_control() == (True, 'No control active. Nothing to do.')
 
 
 def test_dashboard_answers():
@@ -332,6 +335,8 @@ def test_set_mode_plans():
                                                                   ('brake release', rs.RUNNING)]
     assert rs.plan_set_mode(rs.RUNNING, rs.IDLE, True) == [('stop', None), ('power off', rs.POWER_OFF),
                                                            ('power on', rs.IDLE)]
+    # Already there: robot_state_helper sends nothing, stop_program included.
+    assert rs.plan_set_mode(rs.RUNNING, rs.RUNNING, True) == []
     with pytest.raises(ValueError, match='cannot be explicitly selected'):
         rs.plan_set_mode(rs.RUNNING, 'BACKDRIVE', False)
 
