@@ -321,6 +321,16 @@ def test_script_and_resend_in_headless_mode():
     assert robot.hand_back_control() == (True, 'No control active. Nothing to do.')
 
 
+def test_resend_without_headless_mode():
+    # The simulated controller has no teach pendant: resend starts External Control in either mode.
+    robot = rs.RobotState(headless=False)
+    robot.script_started(secondary=False)
+    assert not robot.program_running
+    assert robot.resend_robot_program() == (True, 'Successfully resent robot program') and robot.program_running
+    robot.dashboard('power off')
+    assert not robot.resend_robot_program()[0]
+
+
 def test_dashboard_answers():
     robot = rs.RobotState()
     assert robot.dashboard('robotmode') == 'Robotmode: RUNNING'

@@ -187,7 +187,7 @@ class ArmSim(object):
             rospy.Service('~dashboard/is_in_remote_control', dash_srv.IsInRemoteControl, lambda req: (
                 self._dashboard('is in remote control'), True, True))
         rospy.Service('~hand_back_control', Trigger, lambda req: self._locked(self.robot.hand_back_control))
-        rospy.Service('~resend_robot_program', Trigger, lambda req: self._locked(self.robot.resend_robot_program))
+        rospy.Service('~resend_robot_program', Trigger, self._resend_robot_program)
         rospy.Service('~set_speed_slider', ur_srv.SetSpeedSliderFraction, self._set_speed_slider)
         rospy.Service('~set_io', ur_srv.SetIO, self._set_io)
         rospy.Service('~set_analog_output', ur_srv.SetAnalogOutput, lambda req: (self._locked(
@@ -305,6 +305,12 @@ class ArmSim(object):
         if not ok:
             self.rospy.logerr('set_io: %s' % message)
         return (ok,)
+
+    def _resend_robot_program(self, request):
+        if not self.robot.headless:
+            self.rospy.logwarn('resend_robot_program: ur_robot_driver offers this service with headless_mode:=true '
+                               'only; without it, the real robot starts External Control by dashboard/play')
+        return self._locked(self.robot.resend_robot_program)
 
     def _activate_spline_interpolation(self, request):
         self.spline_interpolation = bool(request.data)

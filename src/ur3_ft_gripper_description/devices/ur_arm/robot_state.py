@@ -139,10 +139,12 @@ class RobotState(object):
         return True, ''
 
     def resend_robot_program(self):
-        """The driver sends its URScript again (headless mode): the External Control program runs."""
-        if not self.headless:
-            return False, 'resend_robot_program works in headless mode only: play the program with ' \
-                          'External Control on the teach pendant (dashboard/play)'
+        """The driver sends its URScript again: the External Control program runs.
+
+        The real driver offers this in headless mode only; the simulated
+        controller, which has no teach pendant to play external_control.urp
+        from, takes it in either mode (the node warns without headless mode).
+        """
         if self.robot_mode != RUNNING:
             return False, 'The robot is %s: it must be RUNNING (set_mode) to run the program' % self.robot_mode
         self.external_control_running = True
