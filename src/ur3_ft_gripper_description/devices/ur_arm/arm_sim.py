@@ -39,7 +39,7 @@ from . import controller_manager as cm
 from . import joints
 from . import robot_state as rs
 from . import urscript
-from .arm_kinematics import ArmKinematics
+from .arm_kinematics import ArmKinematics, pose_error
 from .trajectory import GoalError, Point, Spline
 from .trajectory_controller import TrajectoryController
 
@@ -66,6 +66,8 @@ CB3_SOFTWARE = (3, 15, 7, 0)
 # Step between two Cartesian points turned into joint positions, s.
 CARTESIAN_STEP = 0.02
 SET_MODE_TIMEOUT = 30.0
+# How far (m, rad) the twist controller's commanded pose may run ahead of the tool before it is dropped.
+TWIST_CATCH_UP = 0.01
 # The read-only controllers of the config and what each publishes.
 READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_torque_sensor_controller')
 
@@ -119,6 +121,8 @@ class ArmSim(object):
         self.goal_handles = {}       # (controller, goal id) -> ServerGoalHandle
         self.group_velocity = np.zeros(6)
         self.twist = np.zeros(6)
+        self.twist_pose = None       # the twist controller's commanded tool pose (4x4), while it runs
+        self.twisting = False
         self.script_move = None      # (JointMove, elapsed s) of a movej from script_command
         self.script_queue = []
         self.limit_factor = 1.0
@@ -759,6 +763,13 @@ class ArmSim(object):
 
     def _command(self, dt):
         self.limit_factor = 1.0
+        command = self._controller_command(dt)
+        if not self.twisting:
+            self.twist_pose = None
+        return command
+
+    def _controller_command(self, dt):
+        self.twisting = False
         if self.robot.robot_mode != rs.RUNNING:
             self.script_move = None
             self.script_queue = []
@@ -781,9 +792,30 @@ class ArmSim(object):
             if controller.type == VELOCITY_GROUP_TYPE:
                 return self.q + self.group_velocity * dt
             if controller.type == TWIST_TYPE:
-                jacobian = self.arm.jacobian(self.q)
-                return self.q + np.linalg.lstsq(jacobian, self.twist * scaling, rcond=None)[0] * dt
+                self.twisting = True
+                return self._twist_step(dt, scaling)
         return self.q
+
+    def _twist_step(self, dt, scaling):
+        """speedl: the tool's pose moves by the twist exactly (what is not commanded stays put).
+
+        The commanded pose is integrated in Cartesian space and the joints are
+        steered to it, so the linearisation's error does not pile up as drift.
+        """
+        from transforms3d.axangles import axangle2mat
+        actual = self.arm.forward(self.q)
+        if self.twist_pose is None:
+            self.twist_pose = actual
+        twist = self.twist * scaling
+        pose = self.twist_pose.copy()
+        pose[:3, 3] += twist[:3] * dt
+        angle = float(np.linalg.norm(twist[3:])) * dt
+        if angle > 0.0:
+            pose[:3, :3] = axangle2mat(twist[3:] / np.linalg.norm(twist[3:]), angle).dot(pose[:3, :3])
+        error = pose_error(pose, actual)
+        # A pose the joints cannot follow (limits, singularity) is not chased later: start from where they are.
+        self.twist_pose = pose if np.linalg.norm(error) < TWIST_CATCH_UP else actual
+        return self.q + np.linalg.lstsq(self.arm.jacobian(self.q), error, rcond=None)[0]
 
     def _script_step(self, dt):
         while self.script_move is None and self.script_queue:
