@@ -230,7 +230,8 @@ STARTED = ['joint_state_controller', 'scaled_pos_joint_traj_controller', 'speed_
 
 def manager(ur_type='ur5e'):
     sections, joints = cm.load_config(controllers_yaml(ur_type))
-    return cm.ControllerManager(sections, joints, STARTED, [n for n in sections if n not in STARTED])
+    return cm.ControllerManager(sections, joints, STARTED, [n for n in sections if n not in STARTED and
+                                                            sections[n]['type'] in cm.SIMULATED_TYPES])
 
 
 def states(m):
@@ -272,6 +273,12 @@ def test_unknown_started_controller_is_one_line():
     sections, joints = cm.load_config(controllers_yaml('ur5e'))
     with pytest.raises(cm.ControllerConfigError, match='not_there'):
         cm.ControllerManager(sections, joints, ['not_there'], [])
+
+
+def test_controller_the_simulation_cannot_run_is_one_line():
+    sections, joints = cm.load_config(controllers_yaml('ur5e'))
+    with pytest.raises(cm.ControllerConfigError, match='robot_status_controller.*not simulated'):
+        cm.ControllerManager(sections, joints, STARTED + ['robot_status_controller'], [])
 
 
 # -- robot modes, program, dashboard -------------------------------------------------

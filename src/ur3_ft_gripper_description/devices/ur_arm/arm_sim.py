@@ -909,7 +909,8 @@ def read_settings(get_param):
     settings.joints = [name if name.startswith(settings.prefix) else settings.prefix + name for name in joints]
     started = str(get_param('~controllers', '')).split()
     stopped = get_param('~stopped_controllers', '')
-    stopped = str(stopped).split() if stopped else [n for n in sections if n not in started]
+    stopped = str(stopped).split() if stopped else [n for n in sections if n not in started and
+                                                    sections[n]['type'] in cm.SIMULATED_TYPES]
     try:
         settings.manager = cm.ControllerManager(sections, settings.joints, started, stopped)
     except cm.ControllerConfigError as exc:
