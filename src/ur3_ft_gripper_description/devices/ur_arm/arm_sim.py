@@ -68,6 +68,7 @@ CARTESIAN_STEP = 0.02
 SET_MODE_TIMEOUT = 30.0
 # How far (m, rad) the twist controller's commanded pose may run ahead of the tool before it is dropped.
 TWIST_CATCH_UP = 0.01
+TWIST_NEWTON_STEPS = 4
 # The read-only controllers of the config and what each publishes.
 READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_torque_sensor_controller')
 
@@ -812,10 +813,19 @@ class ArmSim(object):
         angle = float(np.linalg.norm(twist[3:])) * dt
         if angle > 0.0:
             pose[:3, :3] = axangle2mat(twist[3:] / np.linalg.norm(twist[3:]), angle).dot(pose[:3, :3])
-        error = pose_error(pose, actual)
         # A pose the joints cannot follow (limits, singularity) is not chased later: start from where they are.
-        self.twist_pose = pose if np.linalg.norm(error) < TWIST_CATCH_UP else actual
-        return self.q + np.linalg.lstsq(self.arm.jacobian(self.q), error, rcond=None)[0]
+        if np.linalg.norm(pose_error(pose, actual)) > TWIST_CATCH_UP:
+            self.twist_pose = actual
+            return self.q
+        self.twist_pose = pose
+        # A few Newton steps: a long cycle (a loaded machine) must not leave a second-order error.
+        q = self.q.copy()
+        for _ in range(TWIST_NEWTON_STEPS):
+            error = pose_error(pose, self.arm.forward(q))
+            if np.linalg.norm(error) < 1e-10:
+                break
+            q = q + np.linalg.lstsq(self.arm.jacobian(q), error, rcond=None)[0]
+        return q
 
     def _script_step(self, dt):
         while self.script_move is None and self.script_queue:
