@@ -416,7 +416,12 @@ class ArmSim(object):
 
     def _refuse(self, name, handle, code, message):
         self.rospy.logerr('%s: %s' % (name, message))
-        handle.set_rejected(self._result(name, code, message), message)
+        if self.manager.controllers[name].type in PASS_THROUGH_TYPES:
+            # pass_through_controllers serve a simple action server: a goal is accepted, then aborted.
+            handle.set_accepted()
+            handle.set_aborted(self._result(name, code, message), message)
+        else:
+            handle.set_rejected(self._result(name, code, message), message)
 
     def _trajectory_goal(self, name):
         def on_goal(handle):
