@@ -9,6 +9,7 @@ controller_manager at the root. It runs against the bring-up as a user
 starts it (ur_driver_interface.test: sim:=true ur_type:=ur5e, nothing else),
 so that a renamed, retyped or lost element fails here.
 """
+import time
 import unittest
 
 import rosgraph
@@ -16,7 +17,9 @@ import rospy
 import rosservice
 import rostest
 import tf2_ros
-from controller_manager_msgs.srv import ListControllers
+from controller_manager_msgs.srv import ListControllers, SwitchController, SwitchControllerRequest
+from std_msgs.msg import Bool, String
+from std_srvs.srv import Trigger
 
 from rostest_helpers import TIMEOUT
 
@@ -142,10 +145,22 @@ class DocumentedInterfaceTest(unittest.TestCase):
         return ({topic for topic, nodes in publishers if set(nodes) - {me}},
                 {topic for topic, nodes in subscribers if set(nodes) - {me}}, types)
 
-    def assert_topics(self, expected, present, types, role):
-        missing = [topic for topic, _ in expected if topic not in present]
-        self.assertEqual(missing, [], 'nobody %s %s' % (role, ', '.join(missing)))
-        wrong = ['%s is %s, documented %s' % (topic, types.get(topic), kind) for topic, kind in expected
+    def assert_topics(self, published, subscribed):
+        """Each (topic, type) of `published` has a publisher, of `subscribed` a subscriber, with that type.
+
+        The node sets its interface up one element after the other: the graph is read
+        again until it is complete, or TIMEOUT has passed.
+        """
+        end = time.monotonic() + TIMEOUT
+        while True:
+            publishers, subscribers, types = self.graph()
+            missing = (['nobody publishes ' + topic for topic, _ in published if topic not in publishers] +
+                       ['nobody subscribes to ' + topic for topic, _ in subscribed if topic not in subscribers])
+            if not missing or time.monotonic() > end:
+                break
+            time.sleep(0.2)
+        self.assertEqual(missing, [])
+        wrong = ['%s is %s, documented %s' % (topic, types.get(topic), kind) for topic, kind in published + subscribed
                  if types.get(topic) != kind]
         self.assertEqual(wrong, [])
 
@@ -162,16 +177,11 @@ class DocumentedInterfaceTest(unittest.TestCase):
         self.assertEqual(wrong, [])
 
     def test_topics_exist_with_their_documented_types(self):
-        published, subscribed, types = self.graph()
-        self.assert_topics(PUBLISHED, published, types, 'publishes')
-        self.assert_topics(SUBSCRIBED, subscribed, types, 'subscribes to')
+        self.assert_topics(PUBLISHED, SUBSCRIBED)
 
     def test_action_servers_exist_with_their_documented_types(self):
-        published, subscribed, types = self.graph()
         for namespace, action in ACTIONS:
-            out, into = action_topics(namespace, action)
-            self.assert_topics(out, published, types, 'publishes')
-            self.assert_topics(into, subscribed, types, 'subscribes to')
+            self.assert_topics(*action_topics(namespace, action))
 
     def test_bringup_default_controllers_are_loaded_with_their_documented_types(self):
         listing = rospy.ServiceProxy('/controller_manager/list_controllers', ListControllers)().controller
@@ -183,6 +193,55 @@ class DocumentedInterfaceTest(unittest.TestCase):
         # The simulation also loads the config's other controllers, stopped, so that any can be switched to.
         for name, (state, kind) in loaded.items():
             self.assertEqual(kind, CONTROLLER_TYPES.get(name), name)
+
+    # -- semantics a client relies on, at the bring-up's defaults (no headless mode) -----------
+
+    def controller_state(self, name):
+        listing = rospy.ServiceProxy('/controller_manager/list_controllers', ListControllers)().controller
+        return {c.name: c.state for c in listing}[name]
+
+    def wait_program_running(self, running):
+        end = time.monotonic() + TIMEOUT
+        while rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data != running:
+            self.assertLess(time.monotonic(), end, 'robot_program_running never became %s' % running)
+            time.sleep(0.05)
+
+    def wait_controller(self, name, state):
+        end = time.monotonic() + TIMEOUT
+        while self.controller_state(name) != state:
+            self.assertLess(time.monotonic(), end, '%s never became %s' % (name, state))
+            time.sleep(0.05)
+
+    def test_program_stopped_stops_commanding_controllers_until_it_plays_again(self):
+        trigger = {name: rospy.ServiceProxy(HW + name, Trigger) for name in
+                   ('dashboard/stop', 'dashboard/play', 'hand_back_control')}
+        self.assertEqual(trigger['dashboard/stop']().message, 'Stopped')
+        self.wait_program_running(False)
+        # ur_control.launch's controller_stopper stops every controller but the read-only ones.
+        self.wait_controller('scaled_pos_joint_traj_controller', 'stopped')
+        self.assertEqual(self.controller_state('joint_state_controller'), 'running')
+        # The hardware interface refuses to start a commanding controller without control, any strictness.
+        switch = rospy.ServiceProxy('/controller_manager/switch_controller', SwitchController)
+        self.assertFalse(switch(SwitchControllerRequest(start_controllers=['scaled_pos_joint_traj_controller'],
+                                                        strictness=SwitchControllerRequest.BEST_EFFORT)).ok)
+        response = trigger['hand_back_control']()
+        self.assertEqual((response.success, response.message), (True, 'No control active. Nothing to do.'))
+        self.assertEqual(trigger['dashboard/play']().message, 'Starting program')
+        self.wait_program_running(True)
+        self.wait_controller('scaled_pos_joint_traj_controller', 'running')
+
+    def test_program_resent_after_a_script_hands_control_back(self):
+        script = rospy.Publisher(HW + 'script_command', String, queue_size=1)
+        end = time.monotonic() + TIMEOUT
+        while script.get_num_connections() == 0:
+            self.assertLess(time.monotonic(), end, 'nobody subscribes to script_command')
+            time.sleep(0.05)
+        script.publish(String(data='movej([0, -1.57, 1.57, -1.57, -1.57, 0], a=1.4, v=1.05)'))
+        self.wait_program_running(False)
+        response = rospy.ServiceProxy(HW + 'resend_robot_program', Trigger)()
+        self.assertTrue(response.success, response.message)
+        self.wait_program_running(True)
+        self.wait_controller('scaled_pos_joint_traj_controller', 'running')
 
     def test_tf_frames(self):
         buffer = tf2_ros.Buffer()
