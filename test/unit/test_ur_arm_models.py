@@ -230,7 +230,8 @@ STARTED = ['joint_state_controller', 'scaled_pos_joint_traj_controller', 'speed_
 
 def manager(ur_type='ur5e'):
     sections, joints = cm.load_config(controllers_yaml(ur_type))
-    return cm.ControllerManager(sections, joints, STARTED, [n for n in sections if n not in STARTED])
+    return cm.ControllerManager(sections, joints, STARTED, [n for n in sections if n not in STARTED and
+                                                            sections[n]['type'] in cm.SIMULATED_TYPES])
 
 
 def states(m):
@@ -274,6 +275,12 @@ def test_unknown_started_controller_is_one_line():
         cm.ControllerManager(sections, joints, ['not_there'], [])
 
 
+def test_controller_the_simulation_cannot_run_is_one_line():
+    sections, joints = cm.load_config(controllers_yaml('ur5e'))
+    with pytest.raises(cm.ControllerConfigError, match='robot_status_controller.*not simulated'):
+        cm.ControllerManager(sections, joints, STARTED + ['robot_status_controller'], [])
+
+
 # -- robot modes, program, dashboard -------------------------------------------------
 
 def settle(robot, seconds=5.0):
@@ -304,6 +311,8 @@ def test_slider_and_io():
     assert robot.set_io(1, 2, 1.0)[0] and robot.digital_out[2]
     assert not robot.set_io(1, 18, 1.0)[0]
     assert not robot.set_io(9, 0, 1.0)[0]
+    assert not robot.set_io(2, 0, 1.0)[0]  # FUN_SET_FLAG: not implemented by ur_robot_driver
+    assert robot.set_io(1, 5, 0.5)[0] and robot.digital_out[5]  # sent as a bool
     assert robot.set_io(4, 0, 24.0)[0] and robot.tool_voltage == 24
 
 
@@ -316,6 +325,17 @@ def test_script_and_resend_in_headless_mode():
     assert not robot.program_running
     assert robot.resend_robot_program()[0] and robot.program_running
     assert robot.hand_back_control()[0] and not robot.program_running
+    assert robot.hand_back_control() == (True, 'No control active. Nothing to do.')
+
+
+def test_resend_without_headless_mode():
+    # The simulated controller has no teach pendant: resend starts External Control in either mode.
+    robot = rs.RobotState(headless=False)
+    robot.script_started(secondary=False)
+    assert not robot.program_running
+    assert robot.resend_robot_program() == (True, 'Successfully resent robot program') and robot.program_running
+    robot.dashboard('power off')
+    assert not robot.resend_robot_program()[0]
 
 
 def test_dashboard_answers():
@@ -332,6 +352,8 @@ def test_set_mode_plans():
                                                                   ('brake release', rs.RUNNING)]
     assert rs.plan_set_mode(rs.RUNNING, rs.IDLE, True) == [('stop', None), ('power off', rs.POWER_OFF),
                                                            ('power on', rs.IDLE)]
+    # Already there: robot_state_helper sends nothing, stop_program included.
+    assert rs.plan_set_mode(rs.RUNNING, rs.RUNNING, True) == []
     with pytest.raises(ValueError, match='cannot be explicitly selected'):
         rs.plan_set_mode(rs.RUNNING, 'BACKDRIVE', False)
 

@@ -5,16 +5,18 @@ same names and types (ur_robot_driver 2.4.1's ROS_INTERFACE.md and
 controllers.md), so that they run unchanged with sim:=true:
 - state: joint_states (joint_state_controller) at the config's loop_hz, the
   `tool0_controller` TF frame, speed_scaling_factor, wrench (the robot's own
-  TCP sensor, in tool0_controller), ~io_states, ~robot_program_running,
+  TCP sensor, in tool0_controller), ~io_states, ~tool_data, ~robot_program_running,
   ~robot_mode, ~safety_mode;
 - ~set_mode (robot_state_helper's action), ~dashboard/*, ~resend_robot_program,
-  ~hand_back_control, ~set_speed_slider, ~set_io, ~set_payload,
-  ~zero_ftsensor, ~get_robot_software_version, ~script_command;
+  ~hand_back_control, ~set_speed_slider, ~set_io, ~set_analog_output, ~set_payload,
+  ~zero_ftsensor, ~get_robot_software_version, ~activate_spline_interpolation,
+  ~script_command;
 - controller_manager/list_controllers, switch_controller (and the other
   controller_manager services) over the controllers of ur_robot_driver's
   config/<ur_type>_controllers.yaml;
-- every trajectory controller's follow_joint_trajectory action, command
-  topic and state topic; joint_group_vel_controller/command;
+- every trajectory controller's follow_joint_trajectory action, and
+  joint_trajectory_controller's command, state and query_state (not the
+  pass-through controllers', which have only their action); joint_group_vel_controller/command;
   twist_controller/command; the Cartesian controllers' follow_cartesian_trajectory.
 
 The controller_stopper of ur_control.launch is built in: when the program
@@ -37,7 +39,7 @@ from . import controller_manager as cm
 from . import joints
 from . import robot_state as rs
 from . import urscript
-from .arm_kinematics import ArmKinematics
+from .arm_kinematics import ArmKinematics, pose_error
 from .trajectory import GoalError, Point, Spline
 from .trajectory_controller import TrajectoryController
 
@@ -52,6 +54,8 @@ TRAJECTORY_TYPES = {
     # Executed by the robot's own interpolation, which follows the speed slider.
     'pass_through_controllers/JointTrajectoryController': True,
 }
+PASS_THROUGH_TYPES = ('pass_through_controllers/JointTrajectoryController',
+                      'pass_through_controllers/CartesianTrajectoryController')
 CARTESIAN_TYPES = ('pass_through_controllers/CartesianTrajectoryController',
                    'pose_controllers/CartesianTrajectoryController',
                    'position_controllers/CartesianTrajectoryController')
@@ -62,6 +66,9 @@ CB3_SOFTWARE = (3, 15, 7, 0)
 # Step between two Cartesian points turned into joint positions, s.
 CARTESIAN_STEP = 0.02
 SET_MODE_TIMEOUT = 30.0
+# How far (m, rad) the twist controller's commanded pose may run ahead of the tool before it is dropped.
+TWIST_CATCH_UP = 0.01
+TWIST_NEWTON_STEPS = 4
 # The read-only controllers of the config and what each publishes.
 READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_torque_sensor_controller')
 
@@ -81,7 +88,9 @@ class ArmSim(object):
         from ur_dashboard_msgs import msg as dash_msg
         from ur_dashboard_msgs import srv as dash_srv
         from ur_dashboard_msgs.msg import SetModeAction
-        from ur_msgs.msg import IOStates
+        from ur_msgs.msg import IOStates, ToolDataMsg
+        from control_msgs.srv import QueryTrajectoryState
+        from std_srvs.srv import SetBool
         from ur_msgs import srv as ur_srv
 
         self.rospy = rospy
@@ -113,6 +122,8 @@ class ArmSim(object):
         self.goal_handles = {}       # (controller, goal id) -> ServerGoalHandle
         self.group_velocity = np.zeros(6)
         self.twist = np.zeros(6)
+        self.twist_pose = None       # the twist controller's commanded tool pose (4x4), while it runs
+        self.twisting = False
         self.script_move = None      # (JointMove, elapsed s) of a movej from script_command
         self.script_queue = []
         self.limit_factor = 1.0
@@ -143,12 +154,17 @@ class ArmSim(object):
         self.speed_scaling = rospy.Publisher('speed_scaling_factor', Float64, queue_size=10)
         self.wrench = rospy.Publisher('wrench', WrenchStamped, queue_size=10)
         self.io_states = rospy.Publisher('~io_states', IOStates, queue_size=10)
+        self.tool_data = rospy.Publisher('~tool_data', ToolDataMsg, queue_size=10)
+        self.msg['ToolDataMsg'] = ToolDataMsg
         self.program_running_pub = rospy.Publisher('~robot_program_running', Bool, queue_size=1, latch=True)
         self.robot_mode_pub = rospy.Publisher('~robot_mode', dash_msg.RobotMode, queue_size=1, latch=True)
         self.safety_mode_pub = rospy.Publisher('~safety_mode', dash_msg.SafetyMode, queue_size=1, latch=True)
         self.tf = tf2_ros.TransformBroadcaster()
+        # joint_trajectory_controller's topics; the pass-through controllers have only their action.
+        self.streaming_controllers = [name for name in self.trajectory_controllers
+                                      if self.manager.controllers[name].type not in PASS_THROUGH_TYPES]
         self.state_pubs = {name: rospy.Publisher(name + '/state', JointTrajectoryControllerState, queue_size=10)
-                           for name in self.trajectory_controllers}
+                           for name in self.streaming_controllers}
 
         # -- the hardware interface's services and topics
         for name, (command, expected) in rs.DASHBOARD_TRIGGERS.items():
@@ -156,13 +172,13 @@ class ArmSim(object):
         rospy.Service('~dashboard/connect', Trigger, lambda req: (True, 'Connected: Universal Robots Dashboard '
                                                                     'Server (simulated)'))
         rospy.Service('~dashboard/add_to_log', dash_srv.AddToLog, lambda req: self._answer(
-            'addToLog ' + req.message, 'Added log message'))
+            'addToLog ' + req.message, '(Added log message|No log message to add)$'))
         rospy.Service('~dashboard/popup', dash_srv.Popup, lambda req: self._answer(
             'popup ' + req.message, 'showing popup'))
         rospy.Service('~dashboard/load_program', dash_srv.Load, lambda req: self._answer(
-            'load ' + req.filename, 'Loading program: '))
+            'load ' + req.filename, 'Loading program: .+'))
         rospy.Service('~dashboard/load_installation', dash_srv.Load, lambda req: self._answer(
-            'load installation ' + req.filename, 'Loading installation: '))
+            'load installation ' + req.filename, 'Loading installation: .+'))
         rospy.Service('~dashboard/raw_request', dash_srv.RawRequest, lambda req: (self._dashboard(req.query),))
         rospy.Service('~dashboard/quit', dash_srv.GetLoadedProgram, lambda req: (
             self._dashboard('quit'), '', True))
@@ -176,9 +192,14 @@ class ArmSim(object):
             rospy.Service('~dashboard/is_in_remote_control', dash_srv.IsInRemoteControl, lambda req: (
                 self._dashboard('is in remote control'), True, True))
         rospy.Service('~hand_back_control', Trigger, lambda req: self._locked(self.robot.hand_back_control))
-        rospy.Service('~resend_robot_program', Trigger, lambda req: self._locked(self.robot.resend_robot_program))
+        rospy.Service('~resend_robot_program', Trigger, self._resend_robot_program)
         rospy.Service('~set_speed_slider', ur_srv.SetSpeedSliderFraction, self._set_speed_slider)
         rospy.Service('~set_io', ur_srv.SetIO, self._set_io)
+        rospy.Service('~set_analog_output', ur_srv.SetAnalogOutput, lambda req: (self._locked(
+            self.robot.set_io, 3, req.data.pin, req.data.state)[0],))
+        # The simulation has no trajectory forwarding of its own to switch: the flag is kept and reported.
+        self.spline_interpolation = True
+        rospy.Service('~activate_spline_interpolation', SetBool, self._activate_spline_interpolation)
         rospy.Service('~set_payload', ur_srv.SetPayload, self._set_payload)
         rospy.Service('~zero_ftsensor', Trigger, self._zero_ftsensor)
         rospy.Service('~get_robot_software_version', ur_srv.GetRobotSoftwareVersion,
@@ -205,7 +226,9 @@ class ArmSim(object):
                                             self._trajectory_goal(name), self._trajectory_cancel(name),
                                             auto_start=False)
             self.servers[name] = server
-            rospy.Subscriber(name + '/command', JointTrajectory, self._trajectory_command(name), queue_size=1)
+            if name in self.streaming_controllers:
+                rospy.Subscriber(name + '/command', JointTrajectory, self._trajectory_command(name), queue_size=1)
+                rospy.Service(name + '/query_state', QueryTrajectoryState, self._query_state(name))
         for name in self.cartesian_controllers:
             server = actionlib.ActionServer(name + '/follow_cartesian_trajectory', FollowCartesianTrajectoryAction,
                                             self._cartesian_goal(name), self._trajectory_cancel(name),
@@ -236,7 +259,7 @@ class ArmSim(object):
 
     def _answer(self, command, expected):
         answer = self._dashboard(command)
-        return answer, answer.startswith(expected)
+        return answer, rs.answer_matches(answer, expected)
 
     def _trigger(self, command, expected):
         def call(request):
@@ -288,6 +311,30 @@ class ArmSim(object):
             self.rospy.logerr('set_io: %s' % message)
         return (ok,)
 
+    def _resend_robot_program(self, request):
+        if not self.robot.headless:
+            self.rospy.logwarn('resend_robot_program: ur_robot_driver offers this service with headless_mode:=true '
+                               'only; without it, the real robot starts External Control by dashboard/play')
+        return self._locked(self.robot.resend_robot_program)
+
+    def _activate_spline_interpolation(self, request):
+        self.spline_interpolation = bool(request.data)
+        return True, ('Activated' if request.data else 'Deactivated') + \
+            ' spline interpolation in forward trajectory mode.'
+
+    def _query_state(self, name):
+        def on_query(request):
+            with self.lock:
+                controller = self.trajectory_controllers[name]
+                if not self.manager.controllers[name].running or controller.spline is None:
+                    # joint_trajectory_controller answers false: the client sees a failed call.
+                    self.rospy.logerr("Can't sample trajectory. Controller is not running.")
+                    return None
+                ahead = max(0.0, (request.time - self.rospy.Time.now()).to_sec())
+                position, velocity, acceleration = controller.spline.sample(controller.clock + ahead)
+            return self.joints, position.tolist(), velocity.tolist(), acceleration.tolist()
+        return on_query
+
     def _set_payload(self, request):
         c = request.center_of_gravity
         ok, message = self._locked(self.robot.set_payload, request.mass, (c.x, c.y, c.z))
@@ -296,11 +343,14 @@ class ArmSim(object):
         return (ok,)
 
     def _zero_ftsensor(self, request):
+        if not self.e_series:
+            message = ('Zeroing the Force-Torque sensor is only available for e-Series robots (Major version >= 5). '
+                       "This robot's version is %s" % '.'.join(str(v) for v in CB3_SOFTWARE))
+            self.rospy.logerr(message)
+            return False, message
         with self.lock:
-            if self.e_series and not self.robot.program_running:
-                pass  # remote control is always on in the simulation
-            self.wrench_zero = np.zeros(6)
-        return True, 'Successfully zeroed the force torque sensor'
+            self.wrench_zero = np.zeros(6)  # remote control is always on in the simulation
+        return True, ''
 
     # -- controller_manager ------------------------------------------------------------
 
@@ -316,6 +366,15 @@ class ArmSim(object):
 
     def _switch_controller(self, request):
         with self.lock:
+            if not self.robot.program_running:
+                # ur_robot_driver's hardware interface refuses, whatever the strictness.
+                claiming = [name for name in request.start_controllers if name in self.manager.controllers and
+                            self.manager.controllers[name].commanding]
+                if claiming:
+                    self.rospy.logerr("Robot control is currently inactive. Starting controllers that claim "
+                                      "resources is currently not possible. Not starting controller '%s'"
+                                      % claiming[0])
+                    return (False,)
             before = {c.name for c in self.manager.running_commanding()}
             ok, message = self.manager.switch(list(request.start_controllers), list(request.stop_controllers),
                                               request.strictness)
@@ -357,7 +416,12 @@ class ArmSim(object):
 
     def _refuse(self, name, handle, code, message):
         self.rospy.logerr('%s: %s' % (name, message))
-        handle.set_rejected(self._result(name, code, message), message)
+        if self.manager.controllers[name].type in PASS_THROUGH_TYPES:
+            # pass_through_controllers serve a simple action server: a goal is accepted, then aborted.
+            handle.set_accepted()
+            handle.set_aborted(self._result(name, code, message), message)
+        else:
+            handle.set_rejected(self._result(name, code, message), message)
 
     def _trajectory_goal(self, name):
         def on_goal(handle):
@@ -610,7 +674,10 @@ class ArmSim(object):
         result = self.msg['SetModeResult']()
         names = {getattr(self.msg['RobotMode'], n): n for n in dir(self.msg['RobotMode'])
                  if n.isupper() and isinstance(getattr(self.msg['RobotMode'], n), int)}
-        target = names.get(goal.target_robot_mode.mode, str(goal.target_robot_mode.mode))
+        target = names.get(goal.target_robot_mode.mode)
+        if target is None:
+            result.success, result.message = False, 'Requested illegal mode.'
+            return self.set_mode.set_aborted(result, result.message)
         with self.lock:
             try:
                 steps = rs.plan_set_mode(self.robot.robot_mode, target, goal.stop_program)
@@ -620,6 +687,8 @@ class ArmSim(object):
         for command, wait_for in steps:
             self._dashboard(command)
             if wait_for is not None and not self._wait(lambda: self.robot.robot_mode == wait_for):
+                if self.set_mode.is_preempt_requested():
+                    return self.set_mode.set_preempted()
                 result.success = False
                 result.message = 'Timeout or preemption while waiting for robot mode %s' % wait_for
                 return self.set_mode.set_aborted(result, result.message)
@@ -669,9 +738,9 @@ class ArmSim(object):
             running = self.robot.program_running
             modes = (self.robot.robot_mode, self.robot.safety_mode)
             io = (list(self.robot.digital_in), list(self.robot.digital_out), list(self.robot.analog_in),
-                  list(self.robot.analog_out))
+                  list(self.robot.analog_out), self.robot.tool_voltage)
             states = [(name, controller) for name, controller in self.trajectory_controllers.items()
-                      if self.manager.controllers[name].running]
+                      if self.manager.controllers[name].running and name in self.state_pubs]
             state_samples = [(name, controller.spline.sample(controller.clock) if controller.spline else None)
                              for name, controller in states]
             # The read-only controllers publish while they run, as on the robot.
@@ -700,6 +769,13 @@ class ArmSim(object):
 
     def _command(self, dt):
         self.limit_factor = 1.0
+        command = self._controller_command(dt)
+        if not self.twisting:
+            self.twist_pose = None
+        return command
+
+    def _controller_command(self, dt):
+        self.twisting = False
         if self.robot.robot_mode != rs.RUNNING:
             self.script_move = None
             self.script_queue = []
@@ -722,9 +798,39 @@ class ArmSim(object):
             if controller.type == VELOCITY_GROUP_TYPE:
                 return self.q + self.group_velocity * dt
             if controller.type == TWIST_TYPE:
-                jacobian = self.arm.jacobian(self.q)
-                return self.q + np.linalg.lstsq(jacobian, self.twist * scaling, rcond=None)[0] * dt
+                self.twisting = True
+                return self._twist_step(dt, scaling)
         return self.q
+
+    def _twist_step(self, dt, scaling):
+        """speedl: the tool's pose moves by the twist exactly (what is not commanded stays put).
+
+        The commanded pose is integrated in Cartesian space and the joints are
+        steered to it, so the linearisation's error does not pile up as drift.
+        """
+        from transforms3d.axangles import axangle2mat
+        actual = self.arm.forward(self.q)
+        if self.twist_pose is None:
+            self.twist_pose = actual
+        twist = self.twist * scaling
+        pose = self.twist_pose.copy()
+        pose[:3, 3] += twist[:3] * dt
+        angle = float(np.linalg.norm(twist[3:])) * dt
+        if angle > 0.0:
+            pose[:3, :3] = axangle2mat(twist[3:] / np.linalg.norm(twist[3:]), angle).dot(pose[:3, :3])
+        # A pose the joints cannot follow (limits, singularity) is not chased later: start from where they are.
+        if np.linalg.norm(pose_error(pose, actual)) > TWIST_CATCH_UP:
+            self.twist_pose = actual
+            return self.q
+        self.twist_pose = pose
+        # A few Newton steps: a long cycle (a loaded machine) must not leave a second-order error.
+        q = self.q.copy()
+        for _ in range(TWIST_NEWTON_STEPS):
+            error = pose_error(pose, self.arm.forward(q))
+            if np.linalg.norm(error) < 1e-10:
+                break
+            q = q + np.linalg.lstsq(self.arm.jacobian(q), error, rcond=None)[0]
+        return q
 
     def _script_step(self, dt):
         while self.script_move is None and self.script_queue:
@@ -764,7 +870,7 @@ class ArmSim(object):
         wrench.header.frame_id = self.prefix + 'tool0_controller'
         if 'force_torque_sensor_controller' in reading:
             self.wrench.publish(wrench)
-        digital_in, digital_out, analog_in, analog_out = io
+        digital_in, digital_out, analog_in, analog_out, tool_voltage = io
         self.io_states.publish(msg['IOStates'](
             digital_in_states=[msg['Digital'](pin=i, state=s) for i, s in enumerate(digital_in)],
             digital_out_states=[msg['Digital'](pin=i, state=s) for i, s in enumerate(digital_out)],
@@ -773,6 +879,9 @@ class ArmSim(object):
                               for i, s in enumerate(analog_in)],
             analog_out_states=[msg['Analog'](pin=i, domain=msg['Analog'].CURRENT, state=s)
                                for i, s in enumerate(analog_out)]))
+        self.tool_data.publish(msg['ToolDataMsg'](
+            tool_mode=msg['ToolDataMsg'].TOOL_RUNNING_MODE if modes[0] != rs.POWER_OFF
+            else msg['ToolDataMsg'].TOOL_IDLE_MODE, tool_output_voltage=tool_voltage))
         if running != self.last_published_running():
             self.program_running_pub.publish(msg['Bool'](data=running))
             self._published_running = running
@@ -815,7 +924,8 @@ def read_settings(get_param):
     settings.joints = [name if name.startswith(settings.prefix) else settings.prefix + name for name in joints]
     started = str(get_param('~controllers', '')).split()
     stopped = get_param('~stopped_controllers', '')
-    stopped = str(stopped).split() if stopped else [n for n in sections if n not in started]
+    stopped = str(stopped).split() if stopped else [n for n in sections if n not in started and
+                                                    sections[n]['type'] in cm.SIMULATED_TYPES]
     try:
         settings.manager = cm.ControllerManager(sections, settings.joints, started, stopped)
     except cm.ControllerConfigError as exc:

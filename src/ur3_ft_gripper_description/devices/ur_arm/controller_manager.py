@@ -31,6 +31,13 @@ CLAIMS = {
     'position_controllers/CartesianTrajectoryController': 'hardware_interface::PositionJointInterface',
 }
 
+# The read-only controllers the simulation publishes for; robot_status_controller
+# (industrial_msgs, not available here) is not among them.
+READ_ONLY_TYPES = ('joint_state_controller/JointStateController',
+                   'force_torque_sensor_controller/ForceTorqueSensorController',
+                   'scaled_controllers/SpeedScalingStateController')
+SIMULATED_TYPES = tuple(CLAIMS) + READ_ONLY_TYPES
+
 BEST_EFFORT = 1
 STRICT = 2
 
@@ -83,6 +90,9 @@ class ControllerManager(object):
             if name not in sections:
                 raise ControllerConfigError('controller %r is not in the controller configuration (it has %s)'
                                             % (name, ', '.join(sorted(sections))))
+            if sections[name]['type'] not in SIMULATED_TYPES:
+                raise ControllerConfigError('controller %r (%s) is not simulated: leave it out of the controller '
+                                            'lists' % (name, sections[name]['type']))
             self.controllers[name] = Controller(name, sections[name], joints)
         self.order = list(started) + list(stopped)
         ok, message = self.switch(list(started), [], STRICT)

@@ -25,10 +25,11 @@ SELECTABLE_MODES = (POWER_OFF, IDLE, RUNNING)
 EXTERNAL_CONTROL = 'external_control.urp'
 
 # Digital outputs: 8 standard (0-7), 8 configurable (8-15), 2 tool (16-17); flags: none
-# reported; analog: 2 standard inputs, 2 tool inputs, 2 standard outputs (ur_msgs/SetIO's pins).
+# reported; analog: the 2 standard inputs and 2 standard outputs, which is all the driver's
+# io_states carries (the tool's analog inputs are in its tool_data).
 DIGITAL_PINS = 18
 ANALOG_OUTPUTS = 2
-ANALOG_INPUTS = 4
+ANALOG_INPUTS = 2
 TOOL_VOLTAGES = (0, 12, 24)
 
 
@@ -110,14 +111,10 @@ class RobotState(object):
 
     def set_io(self, fun, pin, state):
         """ur_msgs/SetIO: (success, message)."""
-        if fun in (1, 2):  # FUN_SET_DIGITAL_OUT, FUN_SET_FLAG
-            if state not in (0.0, 1.0):
-                return False, 'state %r: digital outputs and flags take 0 or 1' % state
-            if fun == 2:
-                return True, ''  # flags are set on the robot; the driver does not report them back
+        if fun == 1:  # FUN_SET_DIGITAL_OUT: the driver sends the state as a bool, any non-zero is on
             if not 0 <= pin < DIGITAL_PINS:
                 return False, 'pin %d: digital outputs are 0-17 (8-15 configurable, 16-17 tool)' % pin
-            self.digital_out[pin] = state == 1.0
+            self.digital_out[pin] = state != 0.0
             return True, ''
         if fun == 3:  # FUN_SET_ANALOG_OUT
             if not 0 <= pin < ANALOG_OUTPUTS:
@@ -131,8 +128,9 @@ class RobotState(object):
                 return False, 'state %r: the tool voltage is 0, 12 or 24' % state
             self.tool_voltage = int(state)
             return True, ''
-        return False, 'fun %d: use FUN_SET_DIGITAL_OUT (1), FUN_SET_FLAG (2), FUN_SET_ANALOG_OUT (3) or ' \
-                      'FUN_SET_TOOL_VOLTAGE (4)' % fun
+        # FUN_SET_FLAG (2) too: ur_robot_driver does not implement it.
+        return False, 'Cannot execute function %d. This is not (yet) supported: use FUN_SET_DIGITAL_OUT (1), ' \
+                      'FUN_SET_ANALOG_OUT (3) or FUN_SET_TOOL_VOLTAGE (4)' % fun
 
     def set_payload(self, mass, center_of_gravity):
         if not mass >= 0.0 or not all(abs(c) < 10.0 for c in center_of_gravity):
@@ -141,10 +139,12 @@ class RobotState(object):
         return True, ''
 
     def resend_robot_program(self):
-        """The driver sends its URScript again (headless mode): the External Control program runs."""
-        if not self.headless:
-            return False, 'resend_robot_program works in headless mode only: play the program with ' \
-                          'External Control on the teach pendant (dashboard/play)'
+        """The driver sends its URScript again: the External Control program runs.
+
+        The real driver offers this in headless mode only; the simulated
+        controller, which has no teach pendant to play external_control.urp
+        from, takes it in either mode (the node warns without headless mode).
+        """
         if self.robot_mode != RUNNING:
             return False, 'The robot is %s: it must be RUNNING (set_mode) to run the program' % self.robot_mode
         self.external_control_running = True
@@ -152,8 +152,9 @@ class RobotState(object):
         return True, 'Successfully resent robot program'
 
     def hand_back_control(self):
+        # The driver answers success either way: there is nothing to hand back.
         if not self.program_running:
-            return False, 'The External Control program is not running'
+            return True, 'No control active. Nothing to do.'
         self._end_program()
         return True, 'Deactivated control'
 
@@ -296,6 +297,8 @@ def plan_set_mode(robot_mode, target, stop_program):
         raise ValueError('Requested target mode %s which cannot be explicitly selected: use POWER_OFF, '
                          'IDLE or RUNNING' % target)
     steps = []
+    if robot_mode == target:
+        return steps  # robot_state_helper stops the program only on its way to another mode
     if stop_program:
         steps.append(('stop', None))
     if target == POWER_OFF:
