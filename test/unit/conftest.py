@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 import rospkg
 
@@ -84,6 +85,29 @@ class ExpandedModel(kinematics.Model):
         if joint_type:
             assert joint.type == joint_type, '%s is %s, not %s' % (joint.name, joint.type, joint_type)
         return joint
+
+    def assert_physical_inertial(self, link):
+        """An inertial with mass > 0 whose tensor is positive definite and meets the triangle inequality."""
+        inertial = self.robot.link_map[link].inertial
+        assert inertial is not None, '%s has no <inertial>' % link
+        assert inertial.mass > 0, '%s has mass %r' % (link, inertial.mass)
+        i = inertial.inertia
+        tensor = np.array([[i.ixx, i.ixy, i.ixz], [i.ixy, i.iyy, i.iyz], [i.ixz, i.iyz, i.izz]])
+        principal = np.linalg.eigvalsh(tensor)
+        assert principal.min() > 0, '%s: inertia not positive definite: %s' % (link, principal)
+        a, b, c = sorted(principal)
+        assert a + b >= c * (1 - 1e-9), '%s: principal moments %s break the triangle inequality' % (
+            link, principal)
+
+    def com_in(self, frame, links, positions=None):
+        """(total mass, centre of mass in `frame`) of `links`."""
+        total, moment = 0.0, np.zeros(3)
+        for link in links:
+            inertial = self.robot.link_map[link].inertial
+            t = self.transform(frame, link, positions).dot(kinematics.pose_matrix(inertial.origin))
+            total += inertial.mass
+            moment += inertial.mass * t[:3, 3]
+        return total, moment / total
 
     def assert_mesh_resolves(self, mesh):
         """A package:// URI of an upstream model package, naming a file that exists."""

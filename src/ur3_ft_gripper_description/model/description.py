@@ -7,7 +7,10 @@ files and then:
 * removes the extra ``<prefix>base_link`` and its joint that the jr-robotics
   Noetic fork of the 2F-140 macro emits (they collide with the arm's root);
 * refuses to return a model that is not one tree (duplicate names, dangling
-  joints, several roots), so that ``robot_description`` is never half-built.
+  joints, several roots), so that ``robot_description`` is never half-built;
+* gives the FT 300 and 2F-140 links the manufacturer's mass properties and
+  every bare frame an explicit zero mass (``inertials``), and writes the
+  transmissions' hardware interfaces as ros_control names them.
 """
 
 import os
@@ -15,6 +18,8 @@ import re
 import subprocess
 
 import yaml
+
+from ur3_ft_gripper_description.model import inertials
 
 # Package -> how a user gets it; used in "package not found" errors.
 PACKAGE_SOURCES = {
@@ -297,11 +302,33 @@ def check_tree(doc):
                 "link name %r is not a valid TF frame name: use letters, digits, '_' and '/'" % name)
 
 
+def fix_transmission_interfaces(doc):
+    """Write every ros_control hardware interface as its full class name.
+
+    The jr-robotics 2F-140 macro passes on ``hardware/interface/EffortJointInterface``
+    and ros-industrial's a bare ``PositionJointInterface``; ros_control's
+    plugin loader knows them as ``hardware_interface/<Name>``.
+    Returns the names it changed.
+    """
+    changed = []
+    for element in doc.documentElement.getElementsByTagName('hardwareInterface'):
+        text = ''.join(n.data for n in element.childNodes if n.nodeType == n.TEXT_NODE).strip()
+        name = text.rsplit('/', 1)[-1]
+        if text != 'hardware_interface/' + name:
+            for node in list(element.childNodes):
+                element.removeChild(node)
+            element.appendChild(doc.createTextNode('hardware_interface/' + name))
+            changed.append(text)
+    return changed
+
+
 def expand(xacro_file, mappings=None):
-    """xacro_file + args -> checked URDF document (minidom)."""
+    """xacro_file + args -> checked URDF document (minidom), with the model's inertials set."""
     doc = run_xacro(xacro_file, mappings)
     remove_forked_gripper_roots(doc)
     check_tree(doc)
+    inertials.apply(doc)
+    fix_transmission_interfaces(doc)
     return doc
 
 
