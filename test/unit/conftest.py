@@ -126,7 +126,7 @@ def expand_model():
 
 
 @functools.lru_cache(maxsize=None)
-def _configured(ur_type, ft_sensor, gripper, prefix=''):
+def configured(ur_type, ft_sensor, gripper, prefix=''):
     mappings = dict(ur_type=ur_type, ft_sensor=str(ft_sensor).lower(), gripper=str(gripper).lower(),
                     prefix=prefix)
     return ExpandedModel(description.to_xml(description.expand_model(mappings)))
@@ -135,7 +135,7 @@ def _configured(ur_type, ft_sensor, gripper, prefix=''):
 @pytest.fixture(scope='session')
 def configured_model():
     """Expands each (ur_type, ft_sensor, gripper[, prefix]) once per test session."""
-    return _configured
+    return configured
 
 
 @pytest.fixture(scope='session')

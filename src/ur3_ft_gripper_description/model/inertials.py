@@ -213,6 +213,34 @@ def _set_inertial(doc, link, entry):
     link.insertBefore(_inertial_element(doc, entry['mass'], entry['com'], entry['inertia']), link.firstChild)
 
 
+def mass_below(model, frame, positions=None):
+    """(mass, centre of mass in `frame`) of every link below `frame` in a kinematics.Model.
+
+    What a force-torque sensor whose measuring frame is `frame` carries; joints
+    at `positions` (default 0: the 2F-140 open). (0, origin) when nothing hangs there.
+    """
+    if frame not in model.links:
+        raise ValueError('the model has no link %s' % frame)
+    total, moment = 0.0, np.zeros(3)
+    for link in model.links:
+        inertial = model.robot.link_map[link].inertial
+        if link == frame or inertial is None or frame not in _ancestors(model, link):
+            continue
+        pose = model.transform(frame, link, positions)
+        centre = pose[:3, :3].dot(inertial.origin.xyz if inertial.origin else (0.0, 0.0, 0.0)) + pose[:3, 3]
+        total += inertial.mass
+        moment += inertial.mass * centre
+    return total, (moment / total if total > 0 else np.zeros(3))
+
+
+def _ancestors(model, link):
+    names = []
+    while link in model.parent_joint:
+        link = model.parent_joint[link].parent
+        names.append(link)
+    return names
+
+
 MASSLESS = {'mass': 0.0, 'com': (0.0, 0.0, 0.0), 'inertia': dict.fromkeys(INERTIA_KEYS, 0.0)}
 
 
