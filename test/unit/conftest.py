@@ -18,6 +18,7 @@ UR_CONFIG = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config', 
 UR_CONFIG_ROOT = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config')
 EXPAND = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'expand_description')]
 EXPORT = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_urdf')]
+EXPORT_MJCF = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_mjcf')]
 
 # Every model and toggle combination the package offers.
 UR_TYPES = description.ur_types()
@@ -149,8 +150,8 @@ def robotiq_variant():
     return 'noetic' if os.path.exists(os.path.join(urdf, 'robotiq_arg2f_140_macro.xacro')) else 'kinetic'
 
 
-def run_export(*args, env=None):
-    return subprocess.run(EXPORT + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+def run_export(*args, env=None, command=EXPORT):
+    return subprocess.run(command + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           universal_newlines=True, env=env, timeout=120)
 
 
