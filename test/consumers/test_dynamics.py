@@ -6,7 +6,7 @@ import pinocchio
 import pybullet
 import pytest
 
-from conftest import ARM_JOINTS, ROBOTIQ, expected_total_mass, exported_urdf
+from conftest import ARM_JOINTS, FRAMES_TOLERANCE, ROBOTIQ, expected_total_mass, exported_urdf
 
 
 def pinocchio_model(options):
@@ -37,7 +37,7 @@ def bullet_links(client, body):
 def test_pinocchio_total_mass_is_the_arm_plus_the_manuals_parts(options):
     model = pinocchio_model(options)
     total = sum(inertia.mass for inertia in model.inertias)
-    assert total == pytest.approx(expected_total_mass(options), abs=1e-6)
+    assert total == pytest.approx(expected_total_mass(options), abs=FRAMES_TOLERANCE)
 
 
 def tool_load(options):
@@ -65,16 +65,25 @@ def tool_load(options):
 @pytest.mark.parametrize('options, figures', [(['--no-gripper'], 'ft300'), ([], 'ft300_with_2f140')])
 def test_pinocchio_sees_the_manuals_mass_and_centre_of_mass_beyond_the_flange(options, figures):
     mass, com = tool_load(options)
-    assert mass == pytest.approx(ROBOTIQ[figures]['mass'], abs=1e-6)
+    assert mass == pytest.approx(ROBOTIQ[figures]['mass'], abs=FRAMES_TOLERANCE)
     assert com[2] == pytest.approx(ROBOTIQ[figures]['com_z_from_tool0'], abs=1e-4)
     assert np.hypot(com[0], com[1]) < 5e-4
 
 
-def test_pybullet_puts_no_default_mass_anywhere(bullet, options):
+def test_pybullet_holds_the_models_mass_on_every_link(bullet, options):
     body = load_in_bullet(bullet, options)
-    masses = bullet_links(bullet, body)
-    # A link PyBullet fills in gets 1 kg; the model's heaviest Robotiq link is far lighter.
-    assert sum(masses.values()) == pytest.approx(expected_total_mass(options), abs=1e-6), masses
+    urdf = ElementTree.parse(exported_urdf(*options)).getroot()
+    given = {link.get('name'): float(link.find('inertial/mass').get('value'))
+             for link in urdf.findall('link') if link.find('inertial') is not None}
+    held = {}
+    for j in range(pybullet.getNumJoints(body, physicsClientId=bullet)):
+        name = pybullet.getJointInfo(body, j, physicsClientId=bullet)[12].decode()
+        held[name] = pybullet.getDynamicsInfo(body, j, physicsClientId=bullet)[0]
+    # Every link but the (fixed) root is PyBullet's own link: none left to its 1 kg default.
+    assert sorted(held) == sorted(given)
+    for name, mass in held.items():
+        assert mass == pytest.approx(given[name], abs=1e-12), name
+    assert sum(held.values()) == pytest.approx(expected_total_mass(options), abs=FRAMES_TOLERANCE)
 
 
 def test_gravity_torques_at_zero_agree_between_pybullet_and_pinocchio(bullet, options):

@@ -6,7 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from conftest import ARM_JOINTS, FOLDER, expected_total_mass, run
+from conftest import ARM_JOINTS, FOLDER, FRAMES_TOLERANCE, expected_total_mass, run
 
 ARM_POSES = {  # the arm held here; names as upstream's SRDF states where they are those
     'home': [0.0] * 6,
@@ -44,7 +44,7 @@ def mimic_laws(model):
                          ids=['ft_sensor-gripper', 'gripper', 'ft_sensor'])
 def test_total_mass_is_the_models(options):
     model = mujoco.MjModel.from_xml_path(exported_mjcf(*options))
-    assert sum(model.body_mass) == pytest.approx(expected_total_mass(options), abs=1e-6)
+    assert sum(model.body_mass) == pytest.approx(expected_total_mass(options), abs=FRAMES_TOLERANCE)
 
 
 def test_every_mimic_joint_is_an_equality_on_finger_joint(model):

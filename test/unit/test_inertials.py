@@ -40,12 +40,14 @@ def test_no_link_but_the_root_is_left_without_an_inertial(configured_model, togg
     assert bare == [model.root()]
     for link in model.links:
         if not has_geometry(model, link) and link != model.root():
-            assert model.mass(link) == 0.0, link
+            # More than libsdformat's zero (1e-6 kg), far less than anything real.
+            assert model.mass(link) == inertials.FRAME['mass'], link
+            model.assert_physical_inertial(link)
 
 
-def test_root_gets_an_explicit_zero_mass_below_a_world_link(expand_model):
+def test_root_gets_a_frames_mass_below_a_world_link(expand_model):
     model = expand_model(world='true')
-    assert model.mass('base_link') == 0.0
+    assert model.mass('base_link') == inertials.FRAME['mass']
     assert model.robot.link_map['world'].inertial is None
 
 

@@ -44,8 +44,8 @@ def test_ft300_defaults_are_the_real_devices():
     assert settings.rate == pytest.approx(100.0)
     assert settings.noise_force == pytest.approx(0.1)
     assert settings.noise_torque == pytest.approx(0.005)
-    # The load is the model's gripper, with the FT 300 manual's figures.
-    assert settings.payload.mass == pytest.approx(0.975)
+    # The load is the model's gripper, with the FT 300 manual's figures (and gripper_tcp's 10 mg).
+    assert settings.payload.mass == pytest.approx(0.975, abs=2e-5)
     assert settings.payload.com == pytest.approx([0.0, 0.0, manual_gripper_com_z()], abs=2e-4)
 
 
@@ -58,8 +58,8 @@ def test_ft300_default_frames_follow_the_prefix():
 def test_ft300_held_object_is_added_to_the_gripper():
     gripper = ft300_sim.FT300Settings.from_params(params()).payload
     settings = ft300_sim.FT300Settings.from_params(params(payload_mass=0.5, payload_com='0 0 0.2'))
-    assert settings.payload.mass == pytest.approx(1.475)
-    expected = (0.975 * gripper.com + 0.5 * np.array([0, 0, 0.2])) / 1.475
+    assert settings.payload.mass == pytest.approx(gripper.mass + 0.5)
+    expected = (gripper.mass * gripper.com + 0.5 * np.array([0, 0, 0.2])) / (gripper.mass + 0.5)
     assert settings.payload.com == pytest.approx(expected)
 
 

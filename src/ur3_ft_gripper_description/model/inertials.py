@@ -6,7 +6,7 @@ of mass outside the sensor body) and none to its coupling plate; the upstream
 without geometry (``base``, ``flange``, ``tool0``, ``robotiq_ft_frame_id``,
 ``gripper_tcp``) and the finger pads have no ``<inertial>`` at all, which
 PyBullet fills with 1 kg each and libsdformat answers by dropping the links
-below a preserved fixed joint.
+below a preserved fixed joint. Frames get a negligible mass (``FRAME``).
 
 How the figures are made (``tools/generate_link_inertials.py`` ->
 ``config/link_inertials.yaml``): each part (FT 300, 2F-140) has a mass and a
@@ -241,18 +241,25 @@ def _ancestors(model, link):
     return names
 
 
-MASSLESS = {'mass': 0.0, 'com': (0.0, 0.0, 0.0), 'inertia': dict.fromkeys(INERTIA_KEYS, 0.0)}
+# What a frame without geometry weighs: 10 mg, as a sphere of 1 mm radius
+# (I = 2/5 m r^2). Not zero: libsdformat 12 takes any mass within 1e-6 kg of
+# zero for no inertial and then drops the links below a preserved fixed joint
+# (or divides by the lumped mass, zero, and rejects the model); not absent:
+# PyBullet puts 1 kg on a link without <inertial>. Ten frames add 0.1 g to a
+# 12 kg model.
+FRAME = {'mass': 1e-5, 'com': (0.0, 0.0, 0.0),
+         'inertia': dict(ixx=4e-12, ixy=0.0, ixz=0.0, iyy=4e-12, iyz=0.0, izz=4e-12)}
 
 
 def apply(doc, table=None):
-    """Give the model's FT 300 and 2F-140 links their inertials and every bare frame an explicit zero one.
+    """Give the model's FT 300 and 2F-140 links their inertials and every bare frame a negligible one.
 
     A part is recognised by all its upstream link names under one prefix.
     A non-root link with neither geometry nor inertial is a frame: it gets
-    mass 0 written out, so that no engine puts its default mass there. The
-    root keeps none (KDL, under robot_state_publisher, warns about an inertial
-    on the root, and a fixed-base engine never uses it). Returns the names of
-    the links changed.
+    ``FRAME``, so that no engine puts its default mass there. The root keeps
+    none (KDL, under robot_state_publisher, warns about an inertial on the
+    root, and a fixed-base engine never moves it). Returns the names of the
+    links changed.
     """
     robot = doc.documentElement
     links = {link.getAttribute('name'): link for link in _children(robot, 'link')}
@@ -272,6 +279,6 @@ def apply(doc, table=None):
                         changed.append(prefix + n)
     for name, link in links.items():
         if name in children and not any(_children(link, tag) for tag in ('inertial', 'visual', 'collision')):
-            _set_inertial(doc, link, MASSLESS)
+            _set_inertial(doc, link, FRAME)
             changed.append(name)
     return changed
