@@ -217,9 +217,10 @@ class SimDevicesTest(unittest.TestCase):
         unsupported = self.warnings_from('/robotiq_ft_sensor', "Unsupported command_id '3'")
         self.assertEqual(len(unsupported), 1, unsupported)
 
-    def test_unknown_sensor_frame_waits_warns_once_and_publishes_nothing(self):
+    def test_frame_unknown_to_tf_waits_warns_once_and_publishes_nothing(self):
         # Started from here, after the /rosout subscription, so that no warning can be missed.
-        rospy.set_param('no_tf/robotiq_ft_sensor/frame_id', 'no_such_sensor_frame')
+        # (The sensor frame must be a link of the model, whose load it carries: the gravity frame is the unknown one.)
+        rospy.set_param('no_tf/robotiq_ft_sensor/gravity_frame', 'no_such_world_frame')
         launch = roslaunch.scriptapi.ROSLaunch()
         launch.start()
         try:
@@ -234,7 +235,7 @@ class SimDevicesTest(unittest.TestCase):
             self.assertEqual(self.no_tf_stream.since(0), [])
             warnings = self.warnings_from('/no_tf/robotiq_ft_sensor', 'waiting for TF')
             self.assertEqual(len(warnings), 1, warnings)
-            self.assertIn('no_such_sensor_frame', warnings[0])
+            self.assertIn('no_such_world_frame', warnings[0])
         finally:
             launch.stop()
 

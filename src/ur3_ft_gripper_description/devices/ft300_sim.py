@@ -14,7 +14,8 @@ The reading is what the real sensor shows when nothing touches the tool:
 the weight of the gripper (and of a held object) for the current pose,
 taken from TF, plus white noise, minus the zero that SET_ZERO takes. The
 gripper's mass and centre of mass are the model's own: the inertials of
-every link below ``~frame_id`` in ``robot_description`` (fingers open).
+every link below ``~frame_id`` in ``robot_description`` (fingers open;
+looked for up the namespaces, like ``rospy.search_param``).
 
 Private parameters (defaults from config/sim_devices.yaml):
   ~prefix          '' ; prefix of the model's frames (default frames follow it)
@@ -85,6 +86,19 @@ def tool_side_load(description, frame_id):
     except Exception as exc:  # urdf_parser_py raises many types on a malformed model
         raise sim_params.ParamError('robot_description is not a URDF this node can read (%s): %s' % (
             ' '.join(str(exc).split()) or type(exc).__name__, fix))
+
+
+def _searching_get_param(rospy):
+    """rospy.get_param, but robot_description is looked for up the namespaces (rospy.search_param).
+
+    A sensor started in a namespace of its own still finds the model loaded
+    beside the robot, as robot_state_publisher's users expect.
+    """
+    def get_param(name, default=None):
+        if name == 'robot_description':
+            name = rospy.search_param(name) or name
+        return rospy.get_param(name, default)
+    return get_param
 
 
 # Noise is drawn for this many readings at once: a numpy call per reading
@@ -257,7 +271,7 @@ def run(rospy):
     from robotiq_ft_sensor.srv import sensor_accessor, sensor_accessorResponse
 
     try:
-        settings = FT300Settings.from_params(rospy.get_param)
+        settings = FT300Settings.from_params(_searching_get_param(rospy))
     except sim_params.ParamError as exc:
         rospy.logfatal('ft300_sim: bad parameter %s', exc)
         return 1
