@@ -50,8 +50,9 @@ def ur_robot_driver_on_path():
     try:
         rospkg.RosPack().get_path('ur_robot_driver')
     except rospkg.ResourceNotFound:
-        pytest.fail('ur_robot_driver is not on ROS_PACKAGE_PATH: add ../shared/upstream/ur_robot_driver_data '
-                    '(its package.xml, launch/ and config/)', pytrace=False)
+        pytest.fail('ur_robot_driver is not on ROS_PACKAGE_PATH: add $UR3_FT_GRIPPER_UPSTREAM/ur_robot_driver_data '
+                    '(its package.xml, launch/ and config/; tools/quickstart does) or install ros-noetic-ur-robot-driver',
+                    pytrace=False)
 
 
 def calibration(tmp_path, ur_type):

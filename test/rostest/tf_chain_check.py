@@ -2,10 +2,11 @@
 """rostest node: the TF tree published from robot_description runs tool0 -> sensor -> gripper -> pads.
 
 robot_description comes from the load launch as users run it, which expands
-the model with the ROS 1 xacro that Noetic has (ros/xacro noetic-devel).
+the model through the xacro module of the `xacro` package that launch files
+name (ros-noetic-xacro; on Debian 12, PyPI's xacro: see tools/debian12).
 """
-import importlib.util
 import os
+import subprocess
 import unittest
 
 import numpy as np
@@ -13,6 +14,7 @@ import rospkg
 import rospy
 import rostest
 import tf2_ros
+from roslaunch.substitution_args import resolve_args
 
 import rostest_helpers
 from ur3_ft_gripper_description import kinematics
@@ -37,14 +39,18 @@ class TfChainTest(unittest.TestCase):
         """Pose of `source` in `target` as a 4x4 matrix, from TF."""
         return rostest_helpers.lookup(self.buffer, target, source)
 
-    def test_the_model_was_expanded_by_ros1_xacro(self):
-        # The launch's expand_description imports the xacro that this node sees.
-        version = rospkg.RosPack().get_manifest('xacro').version
-        self.assertEqual(version.split('.')[:2], ['1', '14'], 'xacro %s is not ROS 1 xacro' % version)
-        self.assertGreaterEqual(int(version.split('.')[2]), 10)
-        self.assertIsNotNone(importlib.util.find_spec('xacro'))
-        self.assertIsNone(importlib.util.find_spec('xacro.substitution_args'), "ROS 2's xacro is on the path")
+    def test_the_load_launch_set_the_model(self):
         self.assertIn('<robot name="ur3_ft_gripper"', rospy.get_param('robot_description'))
+
+    def test_the_xacro_that_launch_files_name_expands_upstreams_own_model(self):
+        # $(find xacro)/xacro, as ur_description's load_ur.launch runs it.
+        xacro = resolve_args('$(find xacro)/xacro')
+        ur3 = os.path.join(rospkg.RosPack().get_path('ur_description'), 'urdf', 'ur3.xacro')
+        run = subprocess.run([xacro, ur3], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             universal_newlines=True, timeout=60)
+        self.assertEqual(run.returncode, 0, run.stderr)
+        model = kinematics.Model(run.stdout)
+        self.assertEqual(model.chain('base_link', 'tool0')[-1].child, 'tool0')
 
     def test_chain_from_base_link_through_sensor_to_gripper(self):
         for parent, child in zip(CHAIN, CHAIN[1:]):
