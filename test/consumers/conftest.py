@@ -20,8 +20,9 @@ FOLDER = tempfile.mkdtemp(prefix='ur3_ft_gripper_consumers_')
 ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
               'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint')
 FT300_LINKS = ('ft300_mounting_plate', 'ft300_sensor')
-GRIPPER_LINKS = ('robotiq_arg2f_base_link',) + tuple('%s_%s' % (side, part) for side in ('left', 'right') for part in (
-    'outer_knuckle', 'outer_finger', 'inner_finger', 'inner_finger_pad', 'inner_knuckle'))
+GRIPPER_LINKS = ('robotiq_arg2f_base_link',) + tuple(
+    '%s_%s' % (side, part) for side in ('left', 'right')
+    for part in ('outer_knuckle', 'outer_finger', 'inner_finger', 'inner_finger_pad', 'inner_knuckle'))
 
 # What each part must weigh (kg): the Robotiq FT 300 manual's figures, and ur_description's arm.
 with open(os.path.join(PACKAGE_DIR, 'config', 'robotiq_mass.yaml')) as _f:

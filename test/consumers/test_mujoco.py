@@ -91,7 +91,8 @@ def test_with_the_arm_held_the_gripper_settles_on_its_linkage_law(model, pose, o
         data.qvel[arm_dofs] = 0.0
         worst_speed = max(worst_speed, float(np.max(np.abs(data.qvel[fingers]))))
         for joint, leader, offset, multiplier in laws:
-            drift = data.qpos[qpos_address(model, joint)] - (offset + multiplier * data.qpos[qpos_address(model, leader)])
+            law = offset + multiplier * data.qpos[qpos_address(model, leader)]
+            drift = data.qpos[qpos_address(model, joint)] - law
             worst_drift = max(worst_drift, abs(drift))
     assert worst_speed < 0.5, 'a finger joint reached %.3f rad/s' % worst_speed
     assert worst_drift < 0.01, 'a mimic joint drifted %.4f rad from its law' % worst_drift

@@ -110,12 +110,14 @@ def test_upstream_arm_states_are_kept(planner):
     upstream = os.path.join(os.path.dirname(description), 'ur3_moveit_config', 'config', 'ur3.srdf')
     theirs = ElementTree.parse(upstream).getroot()
     for name in ARM_STATES:
-        values = {j.get('name'): float(j.get('value')) for j in theirs.findall("group_state[@name='%s']/joint" % name)}
+        values = {j.get('name'): float(j.get('value'))
+                  for j in theirs.findall("group_state[@name='%s']/joint" % name)}
         assert {j.get('name'): float(j.get('value'))
                 for j in planner.semantic.findall("group_state[@name='%s']/joint" % name)} == values
 
 
-@pytest.mark.parametrize('options', [[], ['--no-ft-sensor'], ['--no-gripper'], ['--no-ft-sensor', '--no-gripper']],
+@pytest.mark.parametrize('options',
+                         [[], ['--no-ft-sensor'], ['--no-gripper'], ['--no-ft-sensor', '--no-gripper']],
                          ids=['ft_sensor-gripper', 'gripper', 'ft_sensor', 'arm'])
 def test_every_named_state_is_free_of_collisions_under_coal_and_fcl(options):
     planner = Planner(options)

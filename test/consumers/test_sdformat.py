@@ -50,7 +50,8 @@ def urdf_masses(urdf_path):
             if link.find('inertial') is not None}
 
 
-@pytest.mark.parametrize('preserved', [(), ('ft300_fix',), ('ft_gripper_joint',), ('ft300_fix', 'ft_gripper_joint')],
+@pytest.mark.parametrize('preserved',
+                         [(), ('ft300_fix',), ('ft_gripper_joint',), ('ft300_fix', 'ft_gripper_joint')],
                          ids=['lumped', 'ft300_fix', 'ft_gripper_joint', 'both'])
 def test_sensor_and_gripper_chain_survive_the_conversion(sdformat_model, preserved):
     urdf = exported_urdf()
@@ -58,7 +59,8 @@ def test_sensor_and_gripper_chain_survive_the_conversion(sdformat_model, preserv
     # Kept as links of their own: the child of every moving or preserved joint;
     # the rest is lumped into them (their mass counted below).
     tree = ElementTree.parse(urdf).getroot().findall('joint')
-    kept = [j.find('child').get('link') for j in tree if j.get('type') != 'fixed' or j.get('name') in preserved]
+    kept = [j.find('child').get('link') for j in tree
+            if j.get('type') != 'fixed' or j.get('name') in preserved]
     assert set(GRIPPER_LINKS) & set(kept)
     for link in kept:
         assert link in links, (link, sorted(links))

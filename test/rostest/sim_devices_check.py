@@ -219,7 +219,8 @@ class SimDevicesTest(unittest.TestCase):
 
     def test_frame_unknown_to_tf_waits_warns_once_and_publishes_nothing(self):
         # Started from here, after the /rosout subscription, so that no warning can be missed.
-        # (The sensor frame must be a link of the model, whose load it carries: the gravity frame is the unknown one.)
+        # The sensor frame must be a link of the model, whose load it carries:
+        # the gravity frame is the unknown one.
         rospy.set_param('no_tf/robotiq_ft_sensor/gravity_frame', 'no_such_world_frame')
         launch = roslaunch.scriptapi.ROSLaunch()
         launch.start()

@@ -39,7 +39,8 @@ class CollisionModel(object):
         self.model = pinocchio.buildModelFromUrdf(urdf_path)
         self.geometry = pinocchio.buildGeomFromUrdf(self.model, urdf_path, pinocchio.GeometryType.COLLISION)
         root = ElementTree.parse(urdf_path).getroot()
-        self.parent = {j.find('child').get('link'): j.find('parent').get('link') for j in root.findall('joint')}
+        self.parent = {j.find('child').get('link'): j.find('parent').get('link')
+                       for j in root.findall('joint')}
         self.mimic = {}
         for joint in root.findall('joint'):
             mimic = joint.find('mimic')
@@ -89,7 +90,7 @@ class CollisionModel(object):
                 self.geometry_data.deactivateCollisionPair(k)
 
     def colliding_pairs(self, q, ignore=()):
-        """Sorted (link, link) pairs of different links in contact at q, among the active ones, leaving out `ignore`."""
+        """Sorted (link, link) pairs in contact at q among the active ones, leaving out `ignore`."""
         self.pin.computeCollisions(self.model, self.data, self.geometry, self.geometry_data, q, False)
         return {self.pair_links[k] for k in self.active if self.pair_links[k] not in ignore and
                 self.geometry_data.collisionResults[k].isCollision()}
@@ -136,7 +137,7 @@ def compute(model, samples, seed=0):
 
 
 def largest_free_value(model, joint, disabled, positions=None, tolerance=1e-4):
-    """The largest value of `joint` (from 0 up to its upper limit) free of collisions but the `disabled` pairs.
+    """The largest value of `joint` (0 .. its upper limit) free of collisions but the `disabled` pairs.
 
     Bisection between 0, which must be free, and the upper limit; returned
     rounded down to 1e-3 rad.

@@ -54,7 +54,8 @@ def collision_matrix(mappings, path=None):
                                 'collision_matrix.yaml')
     with open(path) as f:
         table = yaml.safe_load(f)['disable_collisions']
-    parts = '_'.join(part for part in ('ft_sensor', 'gripper') if mappings.get(part, 'true') == 'true') or 'arm'
+    parts = '_'.join(part for part in ('ft_sensor', 'gripper')
+                     if mappings.get(part, 'true') == 'true') or 'arm'
     ur_type = mappings.get('ur_type', 'ur3')
     if ur_type not in table:
         raise description.DescriptionError(
@@ -171,7 +172,8 @@ def export_mjcf(mappings, output, matrix_path=None):
             writer.element(equality, 'joint', name='%s_mimic' % joint.name, joint1=joint.name,
                            joint2=joint.mimic.joint, solref=MIMIC_SOLREF,
                            polycoef=_numbers((joint.mimic.offset or 0.0,
-                                              1.0 if joint.mimic.multiplier is None else joint.mimic.multiplier,
+                                              1.0 if joint.mimic.multiplier is None
+                                              else joint.mimic.multiplier,
                                               0, 0, 0)))
     finger = prefix + description.FINGER_JOINT
     if finger in model.joints:
