@@ -40,8 +40,8 @@ def mimic_laws(model):
             for i in range(model.neq) if model.eq_type[i] == mujoco.mjtEq.mjEQ_JOINT]
 
 
-@pytest.mark.parametrize('options', [[], ['--no-ft-sensor'], ['--no-gripper']],
-                         ids=['ft_sensor-gripper', 'gripper', 'ft_sensor'])
+@pytest.mark.parametrize('options', [[], ['--no-ft-sensor'], ['--no-gripper'], ['--world']],
+                         ids=['ft_sensor-gripper', 'gripper', 'ft_sensor', 'world'])
 def test_total_mass_is_the_models(options):
     model = mujoco.MjModel.from_xml_path(exported_mjcf(*options))
     assert sum(model.body_mass) == pytest.approx(expected_total_mass(options), abs=FRAMES_TOLERANCE)

@@ -26,6 +26,14 @@ def test_mjcf_has_the_mimic_equalities_stl_meshes_and_the_linkage_exclusions(tmp
     assert root.find("actuator/position[@joint='finger_joint']") is not None
 
 
+def test_world_link_is_mujocos_world_body(tmp_path):
+    out = tmp_path / 'world.xml'
+    assert export_mjcf('--world', '-o', str(out)).returncode == 0
+    root = ElementTree.parse(str(out)).getroot()
+    assert [b.get('name') for b in root.find('worldbody')] == ['base_link']
+    assert 'world' not in [b.get('name') for b in root.iter('body')]
+
+
 def test_prefix_reaches_bodies_joints_and_exclusions(tmp_path):
     out = tmp_path / 'left.xml'
     assert export_mjcf('--prefix', 'left_', '-o', str(out)).returncode == 0

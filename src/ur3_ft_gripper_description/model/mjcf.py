@@ -158,7 +158,12 @@ def export_mjcf(mappings, output, matrix_path=None):
     writer.element(root, 'compiler', angle='radian', autolimits='true')
     root.appendChild(writer.asset)
     world = writer.element(root, 'worldbody')
-    writer.body(world, model.root())
+    if model.root() == 'world':  # MuJoCo's own name for its world body: the model hangs from that
+        for joint in model.robot.joints:
+            if joint.parent == 'world':
+                writer.body(world, joint.child, joint)
+    else:
+        writer.body(world, model.root())
 
     prefix = mappings.get('prefix', '')
     links = set(model.links)
