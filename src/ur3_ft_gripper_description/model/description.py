@@ -9,7 +9,7 @@ files and then:
 * refuses to return a model that is not one tree (duplicate names, dangling
   joints, several roots), so that ``robot_description`` is never half-built;
 * gives the FT 300 and 2F-140 links the manufacturer's mass properties and
-  every bare frame an explicit zero mass (``inertials``), and writes the
+  every bare frame a negligible one (``inertials``), and writes the
   transmissions' hardware interfaces as ros_control names them.
 """
 
