@@ -133,6 +133,10 @@ class SimDevicesTest(unittest.TestCase):
 
     # -- ft300_sim -------------------------------------------------------------
 
+    def test_robot_description_as_loaded_has_an_inertial_on_every_link_but_the_root(self):
+        bare = [link.name for link in self.model.robot.links if link.inertial is None]
+        self.assertEqual(bare, [self.model.root()])
+
     def test_the_models_gripper_has_the_manuals_mass_on_the_sensor_axis(self):
         self.assertAlmostEqual(self.gripper_mass, MANUAL_GRIPPER_MASS, delta=1e-4)  # + gripper_tcp's 10 mg
         np.testing.assert_allclose(self.gripper_com[:2], 0.0, atol=2e-4)
