@@ -65,7 +65,7 @@ class ExportFkTest(unittest.TestCase):
                     for g in list(link.visuals) + list(link.collisions) if g.geometry.mesh is not None]
             self.assertGreaterEqual(len(uris), 14)
             for uri in uris:
-                self.assertTrue(uri.startswith('file:///' if mode == 'absolute' else 'package://'), uri)
+                self.assertTrue(uri.startswith('/' if mode == 'absolute' else 'package://'), uri)
                 self.assertTrue(os.path.isfile(export.resolve_uri(uri)), uri)
 
     def publish_until_in_tf(self, cfg, moving_link):

@@ -21,9 +21,11 @@ import rostest_helpers
 from rostest_helpers import TIMEOUT, Recorder
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import gripper_model
+from ur3_ft_gripper_description.model import inertials
 
 G = 9.80665
-GRIPPER_MASS, GRIPPER_COM = 0.975, np.array([0.0, 0.0, 0.062])  # config/sim_devices.yaml
+# FT 300 manual (config/robotiq_mass.yaml): FT 300 + 2F-140 1275 g, FT 300 alone 300 g.
+MANUAL_GRIPPER_MASS = 0.975
 OBJECT_MASS, OBJECT_COM = 0.5, np.array([0.0, 0.0, 0.2])        # sim_devices.test
 ARM = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
        'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint']
@@ -53,6 +55,8 @@ class SimDevicesTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node('sim_devices_check')
         cls.model = kinematics.Model(rospy.get_param('robot_description'))
+        # The load the sensor must feel is the model's own gripper (its inertials).
+        cls.gripper_mass, cls.gripper_com = inertials.mass_below(cls.model, SENSOR)
         cls.buffer = tf2_ros.Buffer()
         cls.listener = tf2_ros.TransformListener(cls.buffer)
         cls.arm = list(TOOL_DOWN)
@@ -125,29 +129,39 @@ class SimDevicesTest(unittest.TestCase):
 
     # -- ft300_sim -------------------------------------------------------------
 
+    def test_robot_description_as_loaded_has_an_inertial_on_every_link_but_the_root(self):
+        bare = [link.name for link in self.model.robot.links if link.inertial is None]
+        self.assertEqual(bare, [self.model.root()])
+
+    def test_the_models_gripper_has_the_manuals_mass_on_the_sensor_axis(self):
+        self.assertAlmostEqual(self.gripper_mass, MANUAL_GRIPPER_MASS, delta=1e-4)  # + gripper_tcp's 10 mg
+        np.testing.assert_allclose(self.gripper_com[:2], 0.0, atol=2e-4)
+        self.assertGreater(self.gripper_com[2], 0.03)
+
     def test_tool_pointing_down_reads_the_gripper_weight_along_plus_z(self):
         rotation = self.move_to(TOOL_DOWN)
         self.assertAlmostEqual(rotation[2, 2], -1.0, places=6, msg='TOOL_DOWN must point the sensor down')
         force, torque = self.reading(self.wrench)
-        np.testing.assert_allclose(force, [0.0, 0.0, GRIPPER_MASS * G], atol=FORCE_ATOL)
-        np.testing.assert_allclose(torque, [0.0, 0.0, 0.0], atol=TORQUE_ATOL)
+        np.testing.assert_allclose(force, [0.0, 0.0, self.gripper_mass * G], atol=FORCE_ATOL)
+        np.testing.assert_allclose(torque, expected_wrench(rotation, self.gripper_mass, self.gripper_com)[1],
+                                   atol=TORQUE_ATOL)
 
     def test_wrench_follows_the_pose_in_tf(self):
         rng = np.random.default_rng(7)
         for arm in [ZERO] + [list(rng.uniform(-math.pi, math.pi, 6)) for _ in range(4)]:
             rotation = self.move_to(arm)
             force, torque = self.reading(self.wrench)
-            expected_force, expected_torque = expected_wrench(rotation, GRIPPER_MASS, GRIPPER_COM)
+            expected_force, expected_torque = expected_wrench(rotation, self.gripper_mass, self.gripper_com)
             np.testing.assert_allclose(force, expected_force, atol=FORCE_ATOL, err_msg=str(arm))
             np.testing.assert_allclose(torque, expected_torque, atol=TORQUE_ATOL, err_msg=str(arm))
 
     def test_held_object_adds_its_weight_and_lever(self):
         self.move_to(TOOL_DOWN)
         force, _ = self.reading(self.loaded)
-        self.assertAlmostEqual(force[2], (GRIPPER_MASS + OBJECT_MASS) * G, delta=FORCE_ATOL)
+        self.assertAlmostEqual(force[2], (self.gripper_mass + OBJECT_MASS) * G, delta=FORCE_ATOL)
         self.move_to(ZERO)  # horizontal: the weight acts on the combined lever arm
         _, torque = self.reading(self.loaded)
-        lever = GRIPPER_MASS * GRIPPER_COM[2] + OBJECT_MASS * OBJECT_COM[2]
+        lever = self.gripper_mass * self.gripper_com[2] + OBJECT_MASS * OBJECT_COM[2]
         self.assertAlmostEqual(np.linalg.norm(torque), lever * G, delta=2 * TORQUE_ATOL)
 
     def test_both_topics_carry_the_same_values_in_the_devices_resolution(self):
@@ -179,8 +193,8 @@ class SimDevicesTest(unittest.TestCase):
                                    0.0, atol=1e-6)
         second = self.move_to(TOOL_DOWN)
         force, torque = self.reading(self.zeroing)
-        f1, t1 = expected_wrench(first, GRIPPER_MASS, GRIPPER_COM)
-        f2, t2 = expected_wrench(second, GRIPPER_MASS, GRIPPER_COM)
+        f1, t1 = expected_wrench(first, self.gripper_mass, self.gripper_com)
+        f2, t2 = expected_wrench(second, self.gripper_mass, self.gripper_com)
         np.testing.assert_allclose(force, f2 - f1, atol=2 * FORCE_ATOL)
         np.testing.assert_allclose(torque, t2 - t1, atol=2 * TORQUE_ATOL)
 
@@ -205,9 +219,11 @@ class SimDevicesTest(unittest.TestCase):
         unsupported = self.warnings_from('/robotiq_ft_sensor', "Unsupported command_id '3'")
         self.assertEqual(len(unsupported), 1, unsupported)
 
-    def test_unknown_sensor_frame_waits_warns_once_and_publishes_nothing(self):
+    def test_frame_unknown_to_tf_waits_warns_once_and_publishes_nothing(self):
         # Started from here, after the /rosout subscription, so that no warning can be missed.
-        rospy.set_param('no_tf/robotiq_ft_sensor/frame_id', 'no_such_sensor_frame')
+        # The sensor frame must be a link of the model, whose load it carries:
+        # the gravity frame is the unknown one.
+        rospy.set_param('no_tf/robotiq_ft_sensor/gravity_frame', 'no_such_world_frame')
         launch = roslaunch.scriptapi.ROSLaunch()
         launch.start()
         try:
@@ -226,7 +242,7 @@ class SimDevicesTest(unittest.TestCase):
                                          "Unsupported command_id '254'")
             warnings = self.warnings_from('/no_tf/robotiq_ft_sensor', 'waiting for TF')
             self.assertEqual(len(warnings), 1, warnings)
-            self.assertIn('no_such_sensor_frame', warnings[0])
+            self.assertIn('no_such_world_frame', warnings[0])
         finally:
             launch.stop()
 

@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 
+import numpy as np
 import pytest
 import rospkg
 
@@ -17,6 +18,7 @@ UR_CONFIG = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config', 
 UR_CONFIG_ROOT = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config')
 EXPAND = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'expand_description')]
 EXPORT = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_urdf')]
+EXPORT_MJCF = [sys.executable, os.path.join(PACKAGE_DIR, 'scripts', 'export_mjcf')]
 
 # Every model and toggle combination the package offers.
 UR_TYPES = description.ur_types()
@@ -85,6 +87,29 @@ class ExpandedModel(kinematics.Model):
             assert joint.type == joint_type, '%s is %s, not %s' % (joint.name, joint.type, joint_type)
         return joint
 
+    def assert_physical_inertial(self, link):
+        """An inertial with mass > 0 whose tensor is positive definite and meets the triangle inequality."""
+        inertial = self.robot.link_map[link].inertial
+        assert inertial is not None, '%s has no <inertial>' % link
+        assert inertial.mass > 0, '%s has mass %r' % (link, inertial.mass)
+        i = inertial.inertia
+        tensor = np.array([[i.ixx, i.ixy, i.ixz], [i.ixy, i.iyy, i.iyz], [i.ixz, i.iyz, i.izz]])
+        principal = np.linalg.eigvalsh(tensor)
+        assert principal.min() > 0, '%s: inertia not positive definite: %s' % (link, principal)
+        a, b, c = sorted(principal)
+        assert a + b >= c * (1 - 1e-9), '%s: principal moments %s break the triangle inequality' % (
+            link, principal)
+
+    def com_in(self, frame, links, positions=None):
+        """(total mass, centre of mass in `frame`) of `links`."""
+        total, moment = 0.0, np.zeros(3)
+        for link in links:
+            inertial = self.robot.link_map[link].inertial
+            t = self.transform(frame, link, positions).dot(kinematics.pose_matrix(inertial.origin))
+            total += inertial.mass
+            moment += inertial.mass * t[:3, 3]
+        return total, moment / total
+
     def assert_mesh_resolves(self, mesh):
         """A package:// URI of an upstream model package, naming a file that exists."""
         uri = mesh.filename
@@ -102,7 +127,7 @@ def expand_model():
 
 
 @functools.lru_cache(maxsize=None)
-def _configured(ur_type, ft_sensor, gripper, prefix=''):
+def configured(ur_type, ft_sensor, gripper, prefix=''):
     mappings = dict(ur_type=ur_type, ft_sensor=str(ft_sensor).lower(), gripper=str(gripper).lower(),
                     prefix=prefix)
     return ExpandedModel(description.to_xml(description.expand_model(mappings)))
@@ -111,7 +136,7 @@ def _configured(ur_type, ft_sensor, gripper, prefix=''):
 @pytest.fixture(scope='session')
 def configured_model():
     """Expands each (ur_type, ft_sensor, gripper[, prefix]) once per test session."""
-    return _configured
+    return configured
 
 
 @pytest.fixture(scope='session')
@@ -125,8 +150,8 @@ def robotiq_variant():
     return 'noetic' if os.path.exists(os.path.join(urdf, 'robotiq_arg2f_140_macro.xacro')) else 'kinetic'
 
 
-def run_export(*args, env=None):
-    return subprocess.run(EXPORT + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+def run_export(*args, env=None, command=EXPORT):
+    return subprocess.run(command + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                           universal_newlines=True, env=env, timeout=120)
 
 

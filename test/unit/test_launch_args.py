@@ -7,6 +7,7 @@ import subprocess
 import xml.etree.ElementTree as ElementTree
 
 import pytest
+import yaml
 from catkin_pkg.package import parse_package
 
 from conftest import PACKAGE_DIR
@@ -43,8 +44,11 @@ def test_view_launch_passes_transmission_and_safety_arguments_to_the_model(view)
     text = dumped_description(view, *VIEW_LAUNCHES[view] + [
         'safety_limits:=true', 'safety_pos_margin:=0.25', 'safety_k_position:=33',
         'transmission_hw_interface:=hardware_interface/EffortJointInterface'])
-    assert 'hardware_interface/EffortJointInterface' in text
-    assert 'hardware_interface/PositionJointInterface' not in text
+    # Every arm joint's transmission takes the argument; the gripper's keeps its own.
+    urdf = yaml.safe_load(text)['/robot_description']
+    for joint in ('shoulder_pan', 'shoulder_lift', 'elbow', 'wrist_1', 'wrist_2', 'wrist_3'):
+        interfaces = re.findall(r'<joint name="%s_joint">\s*<hardwareInterface>([^<]*)<' % joint, urdf)
+        assert interfaces == ['hardware_interface/EffortJointInterface'], (joint, interfaces)
     assert 'k_position=\\"33\\"' in text
     assert 'soft_lower_limit=\\"-6.03318530' in text  # -2 pi + the margin 0.25
 

@@ -3,6 +3,7 @@ import os
 
 import numpy as np
 import pytest
+import yaml
 
 from conftest import PACKAGE_DIR
 from ur3_ft_gripper_description import kinematics
@@ -14,13 +15,11 @@ PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'sim_devices.yaml')
 
 # -- payload file --------------------------------------------------------------
 
-def test_payload_file_holds_the_gripper_only():
-    payload = wrench_model.load_payload(PAYLOAD_YAML)
-    # FT 300 manual: FT300 + 2F-140 = 1275 g, FT300 alone = 300 g.
-    assert payload.mass == pytest.approx(0.975, abs=0.05)
+def test_devices_file_holds_the_sensor_figures_and_no_second_mass_of_the_gripper():
+    payload = wrench_model.load_payload(PAYLOAD_YAML, 0.975, [0.0, 0.0, 0.06])
+    with open(PAYLOAD_YAML) as f:
+        assert 'payload' not in yaml.safe_load(f)  # the gripper's mass lives in the model
     assert payload.frame_id == 'robotiq_ft_frame_id'
-    # The gripper sits on the +z side of the sensor, on its axis.
-    assert payload.com[2] > 0.03 and np.allclose(payload.com[:2], 0.0)
     assert payload.noise_force > 0 and payload.noise_torque > 0
     assert payload.rate == pytest.approx(100.0)
 

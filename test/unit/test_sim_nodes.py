@@ -1,15 +1,30 @@
 """The simulated-device nodes' logic without a ROS master: parameters, warnings, motion."""
 
+import os
+
 import numpy as np
 import pytest
+import yaml
 from transforms3d.quaternions import quat2mat
 
+from conftest import PACKAGE_DIR, configured
 from ur3_ft_gripper_description.devices import ft300_sim, gripper_joint_states, gripper_sim, sim_params
 
 
 def params(**values):
-    """A get_param(name, default) over `values`, keyed without the '~'."""
+    """A get_param(name, default) over `values`, keyed without the '~'; robot_description: the default model."""
+    values.setdefault('robot_description', configured('ur3', True, True).text)
     return lambda name, default: values.get(name.lstrip('~'), default)
+
+
+def manual_gripper_com_z():
+    """The 2F-140's centre of mass along the sensor axis, from the manual's figures and the model's sensor frame."""
+    with open(os.path.join(PACKAGE_DIR, 'config', 'robotiq_mass.yaml')) as f:
+        figures = yaml.safe_load(f)
+    alone, both = figures['ft300'], figures['ft300_with_2f140']
+    from_tool0 = ((both['mass'] * both['com_z_from_tool0'] - alone['mass'] * alone['com_z_from_tool0'])
+                  / (both['mass'] - alone['mass']))
+    return from_tool0 - configured('ur3', True, True).transform('tool0', 'robotiq_ft_frame_id')[2, 3]
 
 
 class Log(object):
@@ -29,32 +44,39 @@ def test_ft300_defaults_are_the_real_devices():
     assert settings.rate == pytest.approx(100.0)
     assert settings.noise_force == pytest.approx(0.1)
     assert settings.noise_torque == pytest.approx(0.005)
-    assert settings.payload.mass == pytest.approx(0.975)
+    # The load is the model's gripper, with the FT 300 manual's figures (and gripper_tcp's 10 mg).
+    assert settings.payload.mass == pytest.approx(0.975, abs=2e-5)
+    assert settings.payload.com == pytest.approx([0.0, 0.0, manual_gripper_com_z()], abs=2e-4)
 
 
 def test_ft300_default_frames_follow_the_prefix():
-    settings = ft300_sim.FT300Settings.from_params(params(prefix='left_'))
+    settings = ft300_sim.FT300Settings.from_params(
+        params(prefix='left_', robot_description=configured('ur3', True, True, prefix='left_').text))
     assert (settings.frame_id, settings.gravity_frame) == ('left_robotiq_ft_frame_id', 'left_base_link')
 
 
 def test_ft300_held_object_is_added_to_the_gripper():
+    gripper = ft300_sim.FT300Settings.from_params(params()).payload
     settings = ft300_sim.FT300Settings.from_params(params(payload_mass=0.5, payload_com='0 0 0.2'))
-    assert settings.payload.mass == pytest.approx(1.475)
-    expected_z = (0.975 * 0.062 + 0.5 * 0.2) / 1.475
-    assert settings.payload.com == pytest.approx([0.0, 0.0, expected_z])
+    assert settings.payload.mass == pytest.approx(gripper.mass + 0.5)
+    expected = (gripper.mass * gripper.com + 0.5 * np.array([0, 0, 0.2])) / (gripper.mass + 0.5)
+    assert settings.payload.com == pytest.approx(expected)
 
 
 def test_ft300_without_gripper_carries_only_the_held_object():
-    settings = ft300_sim.FT300Settings.from_params(params(gripper_mounted=False))
+    sensor_only = configured('ur3', True, False).text
+    settings = ft300_sim.FT300Settings.from_params(params(robot_description=sensor_only))
     assert settings.payload.mass == 0.0
     settings = ft300_sim.FT300Settings.from_params(
-        params(gripper_mounted=False, payload_mass=0.3, payload_com=[0, 0, 0.1]))
+        params(robot_description=sensor_only, payload_mass=0.3, payload_com=[0, 0, 0.1]))
     assert settings.payload.mass == pytest.approx(0.3)
     assert settings.payload.com == pytest.approx([0, 0, 0.1])
 
 
 @pytest.mark.parametrize('values, named', [
-    (dict(gripper_mounted='no'), '~gripper_mounted'),
+    (dict(robot_description=''), 'robot_description'),
+    (dict(robot_description='<robot name="r"><link name="a"/></robot>'), 'robot_description'),
+    (dict(robot_description='<robot'), 'robot_description'),
     (dict(rate=0), '~rate'),
     (dict(rate='fast'), '~rate'),
     (dict(noise_force=-0.1), '~noise_force'),
@@ -74,10 +96,10 @@ def test_ft300_bad_parameter_is_one_line_naming_it(values, named):
     assert text.startswith(named) and '\n' not in text
 
 
-def test_ft300_devices_file_without_payload_is_rejected(tmp_path):
+def test_ft300_devices_file_without_sensor_is_rejected(tmp_path):
     bad = tmp_path / 'devices.yaml'
-    bad.write_text('sensor: {rate: 100}\n')
-    with pytest.raises(sim_params.ParamError, match="no 'payload' section"):
+    bad.write_text('gripper: {stroke: 0.14}\n')
+    with pytest.raises(sim_params.ParamError, match="no 'sensor' section"):
         ft300_sim.FT300Settings.from_params(params(devices_file=str(bad)))
 
 
@@ -100,7 +122,9 @@ def on_grid(values):
 def test_reading_is_the_gripper_weight_in_the_devices_resolution():
     sensor = ft300_sim.SensorModel(noise_free())
     reading = sensor.read_gravity(*DOWN)
-    assert reading == pytest.approx((0, 0, 9.56, 0, 0, 0), abs=1e-6)  # 0.975 kg * g = 9.5615 N
+    assert reading[:3] == pytest.approx((0, 0, 9.56), abs=1e-6)  # 0.975 kg * g = 9.5615 N
+    # The meshes put the centre of mass within 0.2 mm of the axis: at most a count or two of torque.
+    assert reading[3:] == pytest.approx((0, 0, 0), abs=0.0021)
     on_grid(reading)
 
 

@@ -12,7 +12,10 @@ rq_sensor's answers (``accessor_reply``). ``~serial_id`` and
 
 The reading is what the real sensor shows when nothing touches the tool:
 the weight of the gripper (and of a held object) for the current pose,
-taken from TF, plus white noise, minus the zero that SET_ZERO takes.
+taken from TF, plus white noise, minus the zero that SET_ZERO takes. The
+gripper's mass and centre of mass are the model's own: the inertials of
+every link below ``~frame_id`` in ``robot_description`` (fingers open;
+looked for up the namespaces, like ``rospy.search_param``).
 
 Private parameters (defaults from config/sim_devices.yaml):
   ~prefix          '' ; prefix of the model's frames (default frames follow it)
@@ -20,9 +23,9 @@ Private parameters (defaults from config/sim_devices.yaml):
   ~gravity_frame   <prefix>base_link ; gravity points along its -z
   ~rate            100 Hz (the real sensor's stream rate)
   ~noise_force     0.1 N, ~noise_torque 0.005 Nm (standard deviations; 0 = none)
-  ~payload_mass    0 kg ; ~payload_com [0, 0, 0] m in the sensor frame: a held object
-  ~gripper_mounted true ; false: the model has no 2F-140, only ~payload hangs on the sensor
-  ~devices_file    config/sim_devices.yaml (mass model of the gripper, the sensor's identity)
+  ~payload_mass    0 kg ; ~payload_com [0, 0, 0] m in the sensor frame: a held object,
+                   added to what the model hangs below the sensor
+  ~devices_file    config/sim_devices.yaml (the sensor's noise, rate and identity)
   ~max_pose_age    0.5 s ; a pose older than this is stale (robot_state_publisher
                    stopped?): nothing is published until it is fresh again
   ~serial_id, ~max_retries  rq_sensor's (serial device, reconnection tries): accepted, unused
@@ -34,7 +37,9 @@ never publishes a wrench for a pose it does not know.
 import dataclasses
 import numpy as np
 
+from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import node_loop, sim_params, wrench_model
+from ur3_ft_gripper_description.model import inertials
 
 
 @dataclasses.dataclass
@@ -50,23 +55,50 @@ class FT300Settings(object):
     @classmethod
     def from_params(cls, get_param):
         """Settings from private parameters (``get_param(name, default)``); ParamError if bad."""
-        gripper = sim_params.from_devices_file(get_param, wrench_model.load_payload)
+        gripper = sim_params.from_devices_file(get_param, lambda path: wrench_model.load_payload(
+            path, 0.0, [0.0, 0.0, 0.0]))
         prefix = sim_params.prefix(get_param)
-        mounted = get_param('~gripper_mounted', True)
-        if not isinstance(mounted, bool):
-            raise sim_params.ParamError('~gripper_mounted=%r must be true or false' % (mounted,))
-        if not mounted:
-            gripper = dataclasses.replace(gripper, mass=0.0, com=[0.0, 0.0, 0.0])
+        frame_id = sim_params.frame(get_param, '~frame_id', prefix + gripper.frame_id)
+        mass, com = tool_side_load(get_param('robot_description', None), frame_id)
+        gripper = dataclasses.replace(gripper, mass=mass, com=com)
         object_mass = sim_params.number(get_param, '~payload_mass', 0.0, minimum=0.0)
         object_com = sim_params.vector3(get_param, '~payload_com', [0.0, 0.0, 0.0])
         return cls(
-            frame_id=sim_params.frame(get_param, '~frame_id', prefix + gripper.frame_id),
+            frame_id=frame_id,
             gravity_frame=sim_params.frame(get_param, '~gravity_frame', prefix + 'base_link'),
             rate=sim_params.number(get_param, '~rate', gripper.rate, strictly_above=0.0),
             noise_force=sim_params.number(get_param, '~noise_force', gripper.noise_force, minimum=0.0),
             noise_torque=sim_params.number(get_param, '~noise_torque', gripper.noise_torque, minimum=0.0),
             payload=gripper.with_object(object_mass, object_com),
             max_pose_age=sim_params.number(get_param, '~max_pose_age', 0.5, strictly_above=0.0))
+
+
+def tool_side_load(description, frame_id):
+    """(mass, com in frame_id) of the model's links below the sensor frame; ParamError if it cannot."""
+    fix = 'load the model first (load_ur_ft_gripper.launch sets robot_description)'
+    if not isinstance(description, str) or not description.strip():
+        raise sim_params.ParamError('robot_description is not set: %s' % fix)
+    try:
+        return inertials.mass_below(kinematics.Model(description), frame_id)
+    except ValueError as exc:
+        raise sim_params.ParamError('robot_description: %s; give ~frame_id or ~prefix for the model, or %s'
+                                    % (exc, fix))
+    except Exception as exc:  # urdf_parser_py raises many types on a malformed model
+        raise sim_params.ParamError('robot_description is not a URDF this node can read (%s): %s' % (
+            ' '.join(str(exc).split()) or type(exc).__name__, fix))
+
+
+def _searching_get_param(rospy):
+    """rospy.get_param, but robot_description is looked for up the namespaces (rospy.search_param).
+
+    A sensor started in a namespace of its own still finds the model loaded
+    beside the robot, as robot_state_publisher's users expect.
+    """
+    def get_param(name, default=None):
+        if name == 'robot_description':
+            name = rospy.search_param(name) or name
+        return rospy.get_param(name, default)
+    return get_param
 
 
 # Noise is drawn for this many readings at once: a numpy call per reading
@@ -239,7 +271,7 @@ def run(rospy):
     from robotiq_ft_sensor.srv import sensor_accessor, sensor_accessorResponse
 
     try:
-        settings = FT300Settings.from_params(rospy.get_param)
+        settings = FT300Settings.from_params(_searching_get_param(rospy))
     except sim_params.ParamError as exc:
         rospy.logfatal('ft300_sim: bad parameter %s', exc)
         return 1

@@ -73,18 +73,15 @@ def combine_masses(parts):
     return total, moment / total
 
 
-def load_payload(path):
-    """Payload from a YAML file like config/sim_devices.yaml."""
+def load_payload(path, mass, com):
+    """Payload of `mass` at `com` with the sensor figures of a YAML file like config/sim_devices.yaml."""
     with open(path) as f:
         data = yaml.safe_load(f) or {}
-    if not isinstance(data, dict) or not isinstance(data.get('payload'), dict):
-        raise ValueError("%s: no 'payload' section (with mass and com)" % path)
-    payload, sensor = data['payload'], data.get('sensor') or {}
-    missing = [k for k in ('mass', 'com') if k not in payload]
-    if missing:
-        raise ValueError("%s: 'payload' has no %s" % (path, ' or '.join(missing)))
-    return Payload(mass=payload['mass'], com=payload['com'],
-                   frame_id=payload.get('frame_id', 'robotiq_ft_frame_id'),
+    if not isinstance(data, dict) or not isinstance(data.get('sensor'), dict):
+        raise ValueError("%s: no 'sensor' section" % path)
+    sensor = data['sensor']
+    return Payload(mass=mass, com=com,
+                   frame_id=sensor.get('frame_id', 'robotiq_ft_frame_id'),
                    noise_force=float(sensor.get('noise_force', 0.0)),
                    noise_torque=float(sensor.get('noise_torque', 0.0)),
                    rate=float(sensor.get('rate', 100.0)),

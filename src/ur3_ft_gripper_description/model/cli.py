@@ -78,14 +78,9 @@ def _installed_ur_types():
         return ''
 
 
-def export_urdf_main(argv=None):
-    from . import export
-    parser = OneLineParser(
-        prog='export_urdf',
-        description='Write a flattened URDF of a UR arm + Robotiq FT 300 + 2F-140 (either part '
-                    'optional) for simulators and libraries that do not read xacro or ROS '
-                    'packages. Mesh paths stay package:// URIs unless --absolute-meshes is given. '
-                    'Errors are one line and exit with status 1; no file is written then.')
+def _model_parser(prog, description_text):
+    """The options every export command takes: which model, with which parameter files."""
+    parser = OneLineParser(prog=prog, description=description_text)
     parser.add_argument('--ur-type', default='ur3',
                         help='UR model: a folder of the installed ur_description/config%s '
                              '(default: ur3)' % _installed_ur_types())
@@ -100,21 +95,59 @@ def export_urdf_main(argv=None):
         parser.add_argument('--' + arg, default='', metavar='YAML',
                             help="YAML file with the arm's %s (default: ur_description's file for "
                                  "--ur-type)" % what)
-    parser.add_argument('--absolute-meshes', action='store_true',
-                        help='write mesh paths as absolute file:// URIs instead of package:// URIs')
-    parser.add_argument('-o', '--output', help='write the URDF to this file instead of stdout')
-    args = parser.parse_args(argv)
-    mappings = export.model_mappings(
+    return parser
+
+
+def _model_mappings(args):
+    from . import export
+    return export.model_mappings(
         ur_type=args.ur_type, prefix=args.prefix, ft_sensor=not args.no_ft_sensor,
         gripper=not args.no_gripper, world=args.world,
         joint_limit_params=args.joint_limit_params, kinematics_params=args.kinematics_params,
         physical_params=args.physical_params, visual_params=args.visual_params)
+
+
+def _run_export(prog, write):
+    """`write()`, with every error as one line naming the fix in this command's syntax."""
     try:
-        _write(export.export_urdf(mappings, absolute=args.absolute_meshes), args.output)
+        write()
     except description.DescriptionError as e:
-        print('export_urdf: error: %s' % e, file=sys.stderr)
+        print('%s: error: %s' % (prog, e), file=sys.stderr)
         return 1
     except OSError as e:
-        print('export_urdf: error: %s' % e, file=sys.stderr)
+        print('%s: error: %s' % (prog, e), file=sys.stderr)
         return 1
     return 0
+
+
+def export_urdf_main(argv=None):
+    from . import export
+    parser = _model_parser(
+        'export_urdf',
+        'Write a flattened URDF of a UR arm + Robotiq FT 300 + 2F-140 (either part '
+        'optional) for simulators and libraries that do not read xacro or ROS '
+        'packages. Mesh paths stay package:// URIs unless --absolute-meshes is given. '
+        'Errors are one line and exit with status 1; no file is written then.')
+    parser.add_argument('--absolute-meshes', action='store_true',
+                        help='write mesh paths as absolute file paths instead of package:// URIs')
+    parser.add_argument('-o', '--output', help='write the URDF to this file instead of stdout')
+    args = parser.parse_args(argv)
+    mappings = _model_mappings(args)
+    return _run_export('export_urdf', lambda: _write(
+        export.export_urdf(mappings, absolute=args.absolute_meshes), args.output))
+
+
+def export_mjcf_main(argv=None):
+    from . import mjcf
+    parser = _model_parser(
+        'export_mjcf',
+        'Write a MuJoCo model (MJCF) of a UR arm + Robotiq FT 300 + 2F-140 (either part '
+        'optional): the mimic joints as equality constraints, the linkage pairs that always '
+        'touch excluded from contact, collision meshes as STL files in <OUTPUT without '
+        'extension>_meshes/, and a position actuator on finger_joint. Errors are one line '
+        'and exit with status 1.')
+    parser.add_argument('-o', '--output', required=True, metavar='FILE.xml',
+                        help='write the MJCF here (required: the meshes go beside it)')
+    args = parser.parse_args(argv)
+    mappings = _model_mappings(args)
+    return _run_export('export_mjcf', lambda: mjcf.export_mjcf(mappings, args.output))

@@ -1,7 +1,7 @@
 """Expand xacro into a checked URDF, with one-line errors for bad input.
 
 This is the engine behind `expand_description` (a drop-in for the xacro
-command) and the launch files, in three steps:
+command) and the launch files, in four steps:
 
 1. xacro: the installed ROS 1 xacro reads the xacro files, the arguments and
    the parameter files by its own rules; whatever it rejects becomes one
@@ -10,12 +10,18 @@ command) and the launch files, in three steps:
    joint that the jr-robotics Noetic fork of the 2F-140 macro emits (they
    collide with the arm's root) are removed;
 3. checks: a model that is not one tree with TF-valid names is refused, so
-   that ``robot_description`` is never half-built.
+   that ``robot_description`` is never half-built;
+4. what xacro cannot express over upstream's macros: the FT 300 and 2F-140
+   links get the manufacturer's mass properties and every bare frame a
+   negligible one (``inertials``), and the transmissions' hardware interfaces
+   are written as ros_control names them.
 """
 
 import os
 import re
 import subprocess
+
+from ur3_ft_gripper_description.model import inertials
 
 # Names both upstream 2F-140 macros give (before the prefix).
 GRIPPER_BASE = 'robotiq_arg2f_base_link'
@@ -181,11 +187,38 @@ def check_tree(doc):
                 "link name %r is not a valid TF frame name: use letters, digits, '_' and '/'" % name)
 
 
+def fix_transmission_interfaces(doc):
+    """Write every ros_control hardware interface as its full class name.
+
+    The jr-robotics 2F-140 macro passes on ``hardware/interface/EffortJointInterface``
+    and ros-industrial's a bare ``PositionJointInterface``; ros_control's
+    plugin loader knows them as ``hardware_interface/<Name>``.
+    Returns the names it changed.
+    """
+    changed = []
+    for element in doc.documentElement.getElementsByTagName('hardwareInterface'):
+        text = ''.join(n.data for n in element.childNodes if n.nodeType == n.TEXT_NODE).strip()
+        name = text.rsplit('/', 1)[-1]
+        if text != 'hardware_interface/' + name:
+            for node in list(element.childNodes):
+                element.removeChild(node)
+            element.appendChild(doc.createTextNode('hardware_interface/' + name))
+            changed.append(text)
+    return changed
+
+
+def correct_for_consumers(doc):
+    """What plain xacro cannot express over upstream's macros: mass properties and interface names."""
+    inertials.apply(doc)
+    fix_transmission_interfaces(doc)
+
+
 def expand(xacro_file, mappings=None):
-    """xacro_file + args -> checked URDF document (minidom)."""
+    """xacro_file + args -> checked URDF document (minidom), with the model's inertials set."""
     doc = run_xacro(xacro_file, mappings)
     remove_forked_gripper_roots(doc)
     check_tree(doc)
+    correct_for_consumers(doc)
     return doc
 
 

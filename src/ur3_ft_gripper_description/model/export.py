@@ -2,7 +2,9 @@
 
 ``export_urdf`` expands the package's model with the chosen options through
 the same checked pipeline as ``expand_description`` and can rewrite every
-``package://`` mesh URI to an absolute ``file://`` URI, resolved with rospkg.
+``package://`` mesh URI to a plain absolute path, resolved with rospkg: the
+one form that MuJoCo, PyBullet, pinocchio, yourdfpy and libsdformat all open
+(MuJoCo and PyBullet take a ``file://`` URI for a relative file name).
 """
 
 import os
@@ -40,7 +42,7 @@ def resolve_uri(uri, rospack=None):
 
 
 def absolute_meshes(doc, rospack=None):
-    """Rewrite every mesh URI to file:///absolute/path; DescriptionError if a file is missing."""
+    """Rewrite every mesh URI to its absolute path; DescriptionError if a file is missing."""
     import rospkg
     rospack = rospack or rospkg.RosPack()
     for mesh in mesh_elements(doc):
@@ -48,7 +50,7 @@ def absolute_meshes(doc, rospack=None):
         path = os.path.abspath(resolve_uri(uri, rospack))
         if not os.path.isfile(path):
             raise _missing_mesh(uri, path)
-        mesh.setAttribute('filename', FILE_SCHEME + path)
+        mesh.setAttribute('filename', path)
     return doc
 
 
@@ -65,7 +67,7 @@ def export_urdf(mappings, absolute=False):
     robot = doc.documentElement
     # Says what the file is; a comment may not contain '--', so no command line.
     options = ', '.join('%s=%s' % (k, mappings[k] or "''") for k in sorted(mappings))
-    note = ' Exported by ur3_ft_gripper_description export_urdf (%s); meshes as %s URIs. ' % (
-        options, 'file://' if absolute else 'package://')
+    note = ' Exported by ur3_ft_gripper_description export_urdf (%s); meshes as %s. ' % (
+        options, 'absolute paths' if absolute else 'package:// URIs')
     robot.insertBefore(doc.createComment(note), robot.firstChild)
     return description.to_xml(doc)

@@ -1,0 +1,284 @@
+"""Mass properties a physics engine can trust, for the parts the upstream macros get wrong.
+
+The upstream FT 300 macro gives its whole 300 g to ``ft300_sensor`` (centre
+of mass outside the sensor body) and none to its coupling plate; the upstream
+2F-140 links add up to 0.364 kg where Robotiq's manual says 0.975 kg; frames
+without geometry (``base``, ``flange``, ``tool0``, ``robotiq_ft_frame_id``,
+``gripper_tcp``) and the finger pads have no ``<inertial>`` at all, which
+PyBullet fills with 1 kg each and libsdformat answers by dropping the links
+below a preserved fixed joint. Frames get a negligible mass (``FRAME``).
+
+How the figures are made (``tools/generate_link_inertials.py`` ->
+``config/link_inertials.yaml``): each part (FT 300, 2F-140) has a mass and a
+centre of mass along the flange axis from the manual
+(``config/robotiq_mass.yaml``). Its links' collision meshes are split into
+two groups of uniform density (FT 300: coupling plate | sensor body; 2F-140:
+palm | fingers, knuckles and pads, with the gripper open); the two densities
+are the ones that give both the manual's mass and its centre of mass. Every
+link then gets its mesh's volume, centre of mass and inertia tensor (trimesh's
+mass properties) at its group's density. Without the FT 300 the gripper sits
+on Robotiq's coupling, whose mesh gets the density of aluminium.
+
+Which loading paths carry this: xacro cannot change an inertial that an
+upstream macro has written, so ``apply`` runs in ``description.expand``:
+``expand_description``, the launch files, ``export_urdf`` and ``export_mjcf``
+have it; plain xacro on the top-level file does not (it has only the
+coupling's inertial, which this package's macro writes itself).
+"""
+
+import os
+
+import numpy as np
+import yaml
+
+# Parts whose upstream inertials are replaced, by the link names the upstream
+# macros give (before the prefix); the first link of each part anchors the prefix.
+FT300_PLATE = 'ft300_mounting_plate'
+FT300_BODY = 'ft300_sensor'
+GRIPPER_PALM = 'robotiq_arg2f_base_link'
+GRIPPER_MOVING = tuple('%s_%s' % (side, part) for side in ('left', 'right') for part in (
+    'outer_knuckle', 'outer_finger', 'inner_finger', 'inner_finger_pad', 'inner_knuckle'))
+PARTS = {
+    'ft300': (FT300_BODY, FT300_PLATE),
+    'gripper_2f_140': (GRIPPER_PALM,) + GRIPPER_MOVING,
+}
+COUPLING = 'robotiq_arg2f_coupling'
+INERTIA_KEYS = ('ixx', 'ixy', 'ixz', 'iyy', 'iyz', 'izz')
+
+
+# -- geometry -> mass properties (the generator; needs trimesh) -----------------
+
+class VolumeProperties(object):
+    """Volume (m^3), centre of volume (m) and inertia at unit density about it, in a link frame."""
+
+    def __init__(self, volume, centre, unit_inertia):
+        self.volume = float(volume)
+        self.centre = np.asarray(centre, dtype=float)
+        self.unit_inertia = np.asarray(unit_inertia, dtype=float)
+
+
+def _collision_mesh(collision, resolve):
+    import trimesh
+    from ur3_ft_gripper_description import kinematics
+    geometry = collision.geometry
+    if hasattr(geometry, 'filename'):
+        mesh = trimesh.load(resolve(geometry.filename), force='mesh')
+        if geometry.scale:
+            mesh.apply_scale(np.asarray(geometry.scale, dtype=float))
+    elif hasattr(geometry, 'size'):
+        mesh = trimesh.creation.box(extents=geometry.size)
+    else:
+        raise ValueError('collision geometry %s has no mass properties here' % type(geometry).__name__)
+    mesh.apply_transform(kinematics.pose_matrix(collision.origin))
+    if not mesh.is_watertight:
+        raise ValueError('collision mesh %s is not watertight: its volume is undefined' % geometry)
+    return mesh
+
+
+def volume_properties(link, resolve):
+    """VolumeProperties of a urdf_parser_py link's collision geometry (`resolve`: mesh URI -> path)."""
+    import trimesh
+    meshes = [_collision_mesh(c, resolve) for c in link.collisions]
+    if not meshes:
+        raise ValueError('link %s has no collision geometry' % link.name)
+    mesh = trimesh.util.concatenate(meshes) if len(meshes) > 1 else meshes[0]
+    mesh.density = 1.0
+    return VolumeProperties(mesh.volume, mesh.center_mass, mesh.moment_inertia)
+
+
+def two_densities(group_a, group_b, mass, com_z):
+    """Densities (kg/m^3) of two groups that give `mass` and the centre of mass height `com_z`.
+
+    Each group is a list of (volume, centre z) in one common frame. ValueError
+    when no pair of positive densities does it (the COM lies outside the span
+    of the two groups' centres).
+    """
+    volume_a, volume_b = (sum(v for v, _ in g) for g in (group_a, group_b))
+    z_a, z_b = (sum(v * z for v, z in g) / sum(v for v, _ in g) for g in (group_a, group_b))
+    mass_b = mass * (com_z - z_a) / (z_b - z_a)
+    mass_a = mass - mass_b
+    if mass_a <= 0 or mass_b <= 0:
+        raise ValueError('a centre of mass at z = %.4f m cannot be made from groups centred at '
+                         '%.4f and %.4f m with positive densities' % (com_z, z_a, z_b))
+    return mass_a / volume_a, mass_b / volume_b
+
+
+def link_entry(props, density):
+    """The YAML entry of one link: mass, com and inertia about the com (link frame)."""
+    inertia = props.unit_inertia * density
+    return {
+        'mass': round(props.volume * density, 9),
+        'com': [round(float(v), 9) + 0.0 for v in props.centre],
+        'inertia': dict(zip(INERTIA_KEYS, (round(float(inertia[i, j]), 12) + 0.0 for i, j in (
+            (0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))))),
+    }
+
+
+def distribute(full_model, coupling_model, figures, resolve):
+    """Per-link entries and the densities used, from expanded models (kinematics.Model).
+
+    `full_model` has the FT 300 and the gripper (gripper open: finger_joint 0),
+    `coupling_model` the gripper on the coupling; `figures` is robotiq_mass.yaml.
+    """
+    links = {}
+    densities = {}
+
+    def props(model, name):
+        return volume_properties(model.robot.link_map[name], resolve)
+
+    def centre_z(model, name, p):
+        t = model.transform('tool0', name)
+        return float(t[:3, :3].dot(p.centre)[2] + t[2, 3])
+
+    # FT 300: coupling plate | sensor body, to the manual's "FT 300 alone".
+    ft = {name: props(full_model, name) for name in PARTS['ft300']}
+    plate, body = two_densities(
+        [(ft[FT300_PLATE].volume, centre_z(full_model, FT300_PLATE, ft[FT300_PLATE]))],
+        [(ft[FT300_BODY].volume, centre_z(full_model, FT300_BODY, ft[FT300_BODY]))],
+        figures['ft300']['mass'], figures['ft300']['com_z_from_tool0'])
+    densities.update({FT300_PLATE: plate, FT300_BODY: body})
+
+    # 2F-140: what the manual's FT 300 + 2F-140 adds to the FT 300 alone.
+    alone, both = figures['ft300'], figures['ft300_with_2f140']
+    gripper_mass = both['mass'] - alone['mass']
+    gripper_com_z = (both['mass'] * both['com_z_from_tool0']
+                     - alone['mass'] * alone['com_z_from_tool0']) / gripper_mass
+    grip = {name: props(full_model, name) for name in PARTS['gripper_2f_140']}
+    palm, fingers = two_densities(
+        [(grip[GRIPPER_PALM].volume, centre_z(full_model, GRIPPER_PALM, grip[GRIPPER_PALM]))],
+        [(grip[n].volume, centre_z(full_model, n, grip[n])) for n in GRIPPER_MOVING],
+        gripper_mass, gripper_com_z)
+    densities.update({GRIPPER_PALM: palm})
+    densities.update({name: fingers for name in GRIPPER_MOVING})
+
+    for name, p in list(ft.items()) + list(grip.items()):
+        links[name] = link_entry(p, densities[name])
+    densities[COUPLING] = float(figures['coupling_density'])
+    links[COUPLING] = link_entry(props(coupling_model, COUPLING), densities[COUPLING])
+    return links, densities
+
+
+HEADER = '''\
+# GENERATED by tools/generate_link_inertials.py (run it in `bash tools/quickstart shell`); do not edit.
+# <inertial> of the FT 300, 2F-140 and coupling links (kg, m, kg m^2; com and
+# inertia about the com in the link frame), made from config/robotiq_mass.yaml
+# and the collision meshes by ur3_ft_gripper_description.model.inertials (its
+# docstring says how). Densities that give the manual's masses and centres of
+# mass (kg/m^3):
+'''
+
+
+def write_yaml(path, links, densities):
+    lines = [HEADER]
+    lines.extend('#   %s: %.0f\n' % (name, densities[name]) for name in sorted(densities))
+    with open(path, 'w') as f:
+        f.writelines(lines)
+        yaml.safe_dump({'links': links}, f, default_flow_style=None, sort_keys=True)
+
+
+# -- the model's inertials (expand time; no trimesh) ----------------------------
+
+def default_table_path():
+    from ur3_ft_gripper_description.model import description
+    return os.path.join(description.package_path('ur3_ft_gripper_description'), 'config', 'link_inertials.yaml')
+
+
+def load_table(path=None):
+    with open(path or default_table_path()) as f:
+        return yaml.safe_load(f)['links']
+
+
+def _children(element, tag):
+    return [n for n in element.childNodes if n.nodeType == n.ELEMENT_NODE and n.tagName == tag]
+
+
+def _inertial_element(doc, mass, com, inertia):
+    inertial = doc.createElement('inertial')
+    origin = doc.createElement('origin')
+    origin.setAttribute('xyz', ' '.join(repr(float(v)) for v in com))
+    origin.setAttribute('rpy', '0 0 0')
+    mass_element = doc.createElement('mass')
+    mass_element.setAttribute('value', repr(float(mass)))
+    inertia_element = doc.createElement('inertia')
+    for key in INERTIA_KEYS:
+        inertia_element.setAttribute(key, repr(float(inertia[key])))
+    for child in (origin, mass_element, inertia_element):
+        inertial.appendChild(child)
+    return inertial
+
+
+def _set_inertial(doc, link, entry):
+    for old in _children(link, 'inertial'):
+        link.removeChild(old)
+    link.insertBefore(_inertial_element(doc, entry['mass'], entry['com'], entry['inertia']), link.firstChild)
+
+
+def mass_below(model, frame, positions=None):
+    """(mass, centre of mass in `frame`) of every link below `frame` in a kinematics.Model.
+
+    What a force-torque sensor whose measuring frame is `frame` carries; joints
+    at `positions` (default 0: the 2F-140 open). (0, origin) when nothing hangs there.
+    """
+    if frame not in model.links:
+        raise ValueError('the model has no link %s' % frame)
+    total, moment = 0.0, np.zeros(3)
+    for link in model.links:
+        inertial = model.robot.link_map[link].inertial
+        if link == frame or inertial is None or frame not in _ancestors(model, link):
+            continue
+        pose = model.transform(frame, link, positions)
+        centre = pose[:3, :3].dot(inertial.origin.xyz if inertial.origin else (0.0, 0.0, 0.0)) + pose[:3, 3]
+        total += inertial.mass
+        moment += inertial.mass * centre
+    return total, (moment / total if total > 0 else np.zeros(3))
+
+
+def _ancestors(model, link):
+    names = []
+    while link in model.parent_joint:
+        link = model.parent_joint[link].parent
+        names.append(link)
+    return names
+
+
+# What a frame without geometry weighs: 10 mg, as a sphere of 1 mm radius
+# (I = 2/5 m r^2). Not zero: libsdformat 12 takes any mass within 1e-6 kg of
+# zero for no inertial and then drops the links below a preserved fixed joint
+# (or divides by the lumped mass, zero, and rejects the model); not absent:
+# PyBullet puts 1 kg on a link without <inertial>. Ten frames add 0.1 g to a
+# 12 kg model.
+FRAME = {'mass': 1e-5, 'com': (0.0, 0.0, 0.0),
+         'inertia': dict(ixx=4e-12, ixy=0.0, ixz=0.0, iyy=4e-12, iyz=0.0, izz=4e-12)}
+
+
+def apply(doc, table=None):
+    """Give the model's FT 300 and 2F-140 links their inertials and every bare frame a negligible one.
+
+    A part is recognised by all its upstream link names under one prefix.
+    A non-root link with neither geometry nor inertial is a frame: it gets
+    ``FRAME``, so that no engine puts its default mass there. The root keeps
+    none (KDL, under robot_state_publisher, warns about an inertial on the
+    root, and a fixed-base engine never moves it). Returns the names of the
+    links changed.
+    """
+    robot = doc.documentElement
+    links = {link.getAttribute('name'): link for link in _children(robot, 'link')}
+    children = {c.getAttribute('link') for j in _children(robot, 'joint') for c in _children(j, 'child')}
+    changed = []
+    if any(name.endswith(part[0]) for name in links for part in PARTS.values()):
+        table = table if table is not None else load_table()
+        for part in PARTS.values():
+            anchor = part[0]
+            for name in list(links):
+                if not name.endswith(anchor):
+                    continue
+                prefix = name[:-len(anchor)]
+                if all(prefix + n in links for n in part):
+                    for n in part:
+                        _set_inertial(doc, links[prefix + n], table[n])
+                        changed.append(prefix + n)
+    for name, link in links.items():
+        if name in children and not any(_children(link, tag) for tag in ('inertial', 'visual', 'collision')):
+            _set_inertial(doc, link, FRAME)
+            changed.append(name)
+    return changed
