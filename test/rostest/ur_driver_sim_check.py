@@ -36,7 +36,7 @@ from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSl
 import rostest_helpers
 from rostest_helpers import TIMEOUT
 from ur3_ft_gripper_description import kinematics
-from ur3_ft_gripper_description.devices import sim_params, wrench_model
+from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
 from ur3_ft_gripper_description.model import description
 
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
@@ -513,7 +513,8 @@ class ModelAlongTrajectoryTest(DriverTestBase):
         # Checked along the way, not only at the ends.
         self.assertGreaterEqual(len([f for f in fractions_seen if 0.05 < f < 0.95]), 5, fractions_seen)
         # The FT 300 reads the gripper's weight in its own frame: it turns with the sensor.
-        payload = wrench_model.load_payload(sim_params.default_devices_file())
+        gripper = wrench_model.Load(*ft300_sim.tool_side_load(rospy.get_param('robot_description'),
+                                                              self.prefix + 'robotiq_ft_frame_id'))
         readings = []
         for pose in (HOME, AWAY):
             self.move_to(pose)
@@ -521,7 +522,7 @@ class ModelAlongTrajectoryTest(DriverTestBase):
             sensor = rostest_helpers.lookup(self.buffer, self.prefix + 'base_link',
                                             self.prefix + 'robotiq_ft_frame_id')
             gravity = sensor[:3, :3].T.dot([0.0, 0.0, -1.0])
-            expected = wrench_model.gravity_wrench(gravity[0], gravity[1], gravity[2], payload.mass, payload.com)
+            expected = wrench_model.gravity_wrench(gravity[0], gravity[1], gravity[2], gripper.mass, gripper.com)
             msgs = [rospy.wait_for_message('robotiq_ft_wrench', WrenchStamped, TIMEOUT) for _ in range(20)]
             force = np.mean([[m.wrench.force.x, m.wrench.force.y, m.wrench.force.z] for m in msgs], axis=0)
             np.testing.assert_allclose(force, expected[:3], atol=0.15)

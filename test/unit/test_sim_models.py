@@ -16,12 +16,12 @@ PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'sim_devices.yaml')
 # -- payload file --------------------------------------------------------------
 
 def test_devices_file_holds_the_sensor_figures_and_no_second_mass_of_the_gripper():
-    payload = wrench_model.load_payload(PAYLOAD_YAML, 0.975, [0.0, 0.0, 0.06])
+    sensor = wrench_model.load_sensor_spec(PAYLOAD_YAML)
     with open(PAYLOAD_YAML) as f:
         assert 'payload' not in yaml.safe_load(f)  # the gripper's mass lives in the model
-    assert payload.frame_id == 'robotiq_ft_frame_id'
-    assert payload.noise_force > 0 and payload.noise_torque > 0
-    assert payload.rate == pytest.approx(100.0)
+    assert sensor.frame_id == 'robotiq_ft_frame_id'
+    assert sensor.noise_force > 0 and sensor.noise_torque > 0
+    assert sensor.rate == pytest.approx(100.0)
 
 
 def test_gripper_spec_file():
@@ -34,14 +34,17 @@ def test_gripper_spec_file():
 
 
 def test_held_object_moves_the_centre_of_mass():
-    payload = wrench_model.Payload(mass=1.0, com=[0, 0, 0.06])
-    mass, com = payload.combined(0.5, [0.0, 0.03, 0.24])
-    assert mass == pytest.approx(1.5)
-    assert np.allclose(com, [0.0, 0.01, 0.12])
-    heavier = payload.with_object(0.5, [0.0, 0.03, 0.24])
-    assert heavier.mass == pytest.approx(1.5) and np.allclose(heavier.com, com)
-    assert payload.mass == 1.0  # the original is untouched
-    assert payload.combined(0.0, [9, 9, 9])[1] == pytest.approx(payload.com)
+    gripper = wrench_model.Load(mass=1.0, com=[0, 0, 0.06])
+    heavier = gripper.with_object(0.5, [0.0, 0.03, 0.24])
+    assert heavier.mass == pytest.approx(1.5)
+    assert np.allclose(heavier.com, [0.0, 0.01, 0.12])
+    assert gripper.mass == 1.0  # the original is untouched
+    assert gripper.with_object(0.0, [9, 9, 9]).com == pytest.approx(gripper.com)
+
+
+def test_a_load_refuses_a_negative_mass():
+    with pytest.raises(ValueError, match='finite number >= 0'):
+        wrench_model.Load(mass=-1.0, com=[0, 0, 0])
 
 
 # -- gravity wrench --------------------------------------------------------------

@@ -45,8 +45,8 @@ def test_ft300_defaults_are_the_real_devices():
     assert settings.noise_force == pytest.approx(0.1)
     assert settings.noise_torque == pytest.approx(0.005)
     # The load is the model's gripper, with the FT 300 manual's figures (and gripper_tcp's 10 mg).
-    assert settings.payload.mass == pytest.approx(0.975, abs=2e-5)
-    assert settings.payload.com == pytest.approx([0.0, 0.0, manual_gripper_com_z()], abs=2e-4)
+    assert settings.load.mass == pytest.approx(0.975, abs=2e-5)
+    assert settings.load.com == pytest.approx([0.0, 0.0, manual_gripper_com_z()], abs=2e-4)
 
 
 def test_ft300_default_frames_follow_the_prefix():
@@ -56,21 +56,21 @@ def test_ft300_default_frames_follow_the_prefix():
 
 
 def test_ft300_held_object_is_added_to_the_gripper():
-    gripper = ft300_sim.FT300Settings.from_params(params()).payload
+    gripper = ft300_sim.FT300Settings.from_params(params()).load
     settings = ft300_sim.FT300Settings.from_params(params(payload_mass=0.5, payload_com='0 0 0.2'))
-    assert settings.payload.mass == pytest.approx(gripper.mass + 0.5)
+    assert settings.load.mass == pytest.approx(gripper.mass + 0.5)
     expected = (gripper.mass * gripper.com + 0.5 * np.array([0, 0, 0.2])) / (gripper.mass + 0.5)
-    assert settings.payload.com == pytest.approx(expected)
+    assert settings.load.com == pytest.approx(expected)
 
 
 def test_ft300_without_gripper_carries_only_the_held_object():
     sensor_only = configured('ur3', True, False).text
     settings = ft300_sim.FT300Settings.from_params(params(robot_description=sensor_only))
-    assert settings.payload.mass == 0.0
+    assert settings.load.mass == 0.0
     settings = ft300_sim.FT300Settings.from_params(
         params(robot_description=sensor_only, payload_mass=0.3, payload_com=[0, 0, 0.1]))
-    assert settings.payload.mass == pytest.approx(0.3)
-    assert settings.payload.com == pytest.approx([0, 0, 0.1])
+    assert settings.load.mass == pytest.approx(0.3)
+    assert settings.load.com == pytest.approx([0, 0, 0.1])
 
 
 @pytest.mark.parametrize('values, named', [

@@ -49,27 +49,27 @@ class FT300Settings(object):
     rate: float
     noise_force: float
     noise_torque: float
-    payload: wrench_model.Payload
+    load: wrench_model.Load
+    identity: dict
     max_pose_age: float
 
     @classmethod
     def from_params(cls, get_param):
         """Settings from private parameters (``get_param(name, default)``); ParamError if bad."""
-        gripper = sim_params.from_devices_file(get_param, lambda path: wrench_model.load_payload(
-            path, 0.0, [0.0, 0.0, 0.0]))
+        sensor = sim_params.from_devices_file(get_param, wrench_model.load_sensor_spec)
         prefix = sim_params.prefix(get_param)
-        frame_id = sim_params.frame(get_param, '~frame_id', prefix + gripper.frame_id)
-        mass, com = tool_side_load(get_param('robot_description', None), frame_id)
-        gripper = dataclasses.replace(gripper, mass=mass, com=com)
+        frame_id = sim_params.frame(get_param, '~frame_id', prefix + sensor.frame_id)
+        below_sensor = wrench_model.Load(*tool_side_load(get_param('robot_description', None), frame_id))
         object_mass = sim_params.number(get_param, '~payload_mass', 0.0, minimum=0.0)
         object_com = sim_params.vector3(get_param, '~payload_com', [0.0, 0.0, 0.0])
         return cls(
             frame_id=frame_id,
             gravity_frame=sim_params.frame(get_param, '~gravity_frame', prefix + 'base_link'),
-            rate=sim_params.number(get_param, '~rate', gripper.rate, strictly_above=0.0),
-            noise_force=sim_params.number(get_param, '~noise_force', gripper.noise_force, minimum=0.0),
-            noise_torque=sim_params.number(get_param, '~noise_torque', gripper.noise_torque, minimum=0.0),
-            payload=gripper.with_object(object_mass, object_com),
+            rate=sim_params.number(get_param, '~rate', sensor.rate, strictly_above=0.0),
+            noise_force=sim_params.number(get_param, '~noise_force', sensor.noise_force, minimum=0.0),
+            noise_torque=sim_params.number(get_param, '~noise_torque', sensor.noise_torque, minimum=0.0),
+            load=below_sensor.with_object(object_mass, object_com),
+            identity=sensor.identity,
             max_pose_age=sim_params.number(get_param, '~max_pose_age', 0.5, strictly_above=0.0))
 
 
@@ -120,16 +120,15 @@ def as_device_sends(values):
 
 
 class SensorModel(object):
-    """Reading = gravity wrench of the payload + noise - zero offset (no ROS)."""
+    """Reading = gravity wrench of the load + noise - zero offset (no ROS)."""
 
     def __init__(self, settings, rng=None):
         self.settings = settings
         self.rng = rng if rng is not None else np.random.default_rng()
         self.last_true = None  # noise-free wrench at the last known pose
         self._zero_requested = False
-        payload = settings.payload
-        self._mass = float(payload.mass)
-        self._com = tuple(float(v) for v in payload.com)
+        self._mass = float(settings.load.mass)
+        self._com = tuple(float(v) for v in settings.load.com)
         self._noisy = bool(settings.noise_force or settings.noise_torque)
         self._sigma = np.array([settings.noise_force] * 3 + [settings.noise_torque] * 3)
         self._noise = []  # pre-drawn noise rows: one numpy call per NOISE_BLOCK readings
@@ -290,7 +289,7 @@ def run(rospy):
 
     def accessor(request):
         success, res = accessor_reply(request.command_id, request.command, sensor,
-                                      settings.payload.identity, log)
+                                      settings.identity, log)
         return sensor_accessorResponse(success=success, res=res)
 
     rospy.Service('robotiq_ft_sensor_acc', sensor_accessor, accessor)

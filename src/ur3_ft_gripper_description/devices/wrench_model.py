@@ -30,32 +30,32 @@ def _vec3(value, what):
 
 
 @dataclasses.dataclass
-class Payload(object):
-    """Mass (kg) and centre of mass (m, sensor frame) of the tool-side load,
-    with the sensor figures used to simulate it."""
+class Load(object):
+    """Mass (kg) and centre of mass (m, sensor frame) of what hangs on the sensor's tool side."""
 
     mass: float
     com: np.ndarray
+
+    def __post_init__(self):
+        self.mass = float(self.mass)
+        if not np.isfinite(self.mass) or self.mass < 0:
+            raise ValueError('a load\'s mass must be a finite number >= 0, got %r' % self.mass)
+        self.com = _vec3(self.com, 'centre of mass')
+
+    def with_object(self, object_mass, object_com):
+        """This load plus a held object of `object_mass` at `object_com`."""
+        return Load(*combine_masses([(self.mass, self.com), (object_mass, object_com)]))
+
+
+@dataclasses.dataclass
+class SensorSpec(object):
+    """The FT 300's own figures: sensor frame, noise, stream rate, and the identity it reports."""
+
     frame_id: str = 'robotiq_ft_frame_id'
     noise_force: float = 0.0
     noise_torque: float = 0.0
     rate: float = 100.0
     identity: dict = dataclasses.field(default_factory=dict)
-
-    def __post_init__(self):
-        self.mass = float(self.mass)
-        if not np.isfinite(self.mass) or self.mass < 0:
-            raise ValueError('payload mass must be a finite number >= 0, got %r' % self.mass)
-        self.com = _vec3(self.com, 'payload com')
-
-    def combined(self, object_mass, object_com):
-        """(mass, com) of this load plus a held object of `object_mass` at `object_com`."""
-        return combine_masses([(self.mass, self.com), (object_mass, object_com)])
-
-    def with_object(self, object_mass, object_com):
-        """A copy of this payload that also carries a held object."""
-        mass, com = self.combined(object_mass, object_com)
-        return dataclasses.replace(self, mass=mass, com=com)
 
 
 def combine_masses(parts):
@@ -73,20 +73,19 @@ def combine_masses(parts):
     return total, moment / total
 
 
-def load_payload(path, mass, com):
-    """Payload of `mass` at `com` with the sensor figures of a YAML file like config/sim_devices.yaml."""
+def load_sensor_spec(path):
+    """The `sensor` section of a YAML file like config/sim_devices.yaml."""
     with open(path) as f:
         data = yaml.safe_load(f) or {}
     if not isinstance(data, dict) or not isinstance(data.get('sensor'), dict):
         raise ValueError("%s: no 'sensor' section" % path)
     sensor = data['sensor']
-    return Payload(mass=mass, com=com,
-                   frame_id=sensor.get('frame_id', 'robotiq_ft_frame_id'),
-                   noise_force=float(sensor.get('noise_force', 0.0)),
-                   noise_torque=float(sensor.get('noise_torque', 0.0)),
-                   rate=float(sensor.get('rate', 100.0)),
-                   identity={key: str(sensor.get(key, 'UNKNOWN')) for key in
-                             ('serial_number', 'firmware_version', 'production_year')})
+    return SensorSpec(frame_id=sensor.get('frame_id', 'robotiq_ft_frame_id'),
+                      noise_force=float(sensor.get('noise_force', 0.0)),
+                      noise_torque=float(sensor.get('noise_torque', 0.0)),
+                      rate=float(sensor.get('rate', 100.0)),
+                      identity={key: str(sensor.get(key, 'UNKNOWN')) for key in
+                                ('serial_number', 'firmware_version', 'production_year')})
 
 
 def gravity_wrench(gx, gy, gz, mass, com, g=STANDARD_GRAVITY):
