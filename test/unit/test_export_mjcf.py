@@ -48,7 +48,7 @@ def test_prefix_reaches_bodies_joints_and_exclusions(tmp_path):
     (['--no-such-option', '-o', '{tmp}/m.xml'], ['unrecognized arguments: --no-such-option']),
     ([], ['-o/--output']),
     (['-o', '/proc/no/such/folder/m.xml'], ['cannot write /proc/no/such/folder/m.xml', 'give -o']),
-    (['--ur-type', 'ur7', '-o', '{tmp}/m.xml'], ["ur_type 'ur7'"]),
+    (['--ur-type', 'ur7', '-o', '{tmp}/m.xml'], ['config/ur7/', 'has the models ur3']),
 ])
 def test_bad_input_is_one_line(tmp_path, options, words):
     run = export_mjcf(*[o.format(tmp=tmp_path) for o in options])
