@@ -102,7 +102,7 @@ class BringupSimTest(unittest.TestCase):
 
     def test_arm_from_the_simulated_driver_in_tf(self):
         arm = set(self.prefix + j for j in ARM_JOINTS)
-        state = wait_until(lambda: (lambda m: m if set(m.name) == arm else None)(
+        state = wait_for(lambda: (lambda m: m if set(m.name) == arm else None)(
             rospy.wait_for_message('joint_states', JointState, TIMEOUT)), 'an arm message on joint_states')
         msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + 'tool0', rospy.Time(0),
                                            rospy.Duration(TIMEOUT))

@@ -34,7 +34,7 @@ from ur_msgs.msg import IOStates
 from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSliderFraction
 
 import rostest_helpers
-from rostest_helpers import TIMEOUT
+from rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
 from ur3_ft_gripper_description.model import description
@@ -51,17 +51,6 @@ COMMANDING = ['scaled_pos_joint_traj_controller', 'pos_joint_traj_controller', '
 # The default constraints' goal tolerance (config/<ur_type>_controllers.yaml: goal 0.1 rad).
 GOAL_TOLERANCE = 0.1
 HW = '/ur_hardware_interface/'
-
-
-def wait_until(check, what, timeout=TIMEOUT):
-    end = time.monotonic() + timeout
-    value = None
-    while time.monotonic() < end:
-        value = check()
-        if value:
-            return value
-        time.sleep(0.02)
-    raise AssertionError('%s: not within %g s (last: %r)' % (what, timeout, value))
 
 
 class UrDriver(object):
@@ -82,7 +71,7 @@ class UrDriver(object):
             assert client.wait_for_server(rospy.Duration(TIMEOUT)), 'no action server %s' % client.action_client.ns
             # wait_for_server sees the server's status; a goal sent before the server subscribed
             # to the goal topic would be lost.
-            wait_until(lambda: client.action_client.pub_goal.get_num_connections() > 0,
+            wait_for(lambda: client.action_client.pub_goal.get_num_connections() > 0,
                        'the server of %s subscribes to its goals' % client.action_client.ns)
         services = dict(list_controllers=('controller_manager/list_controllers', ListControllers),
                         switch=('controller_manager/switch_controller', SwitchController),
@@ -132,7 +121,7 @@ def arm_positions(prefix=''):
     def arm_message():
         msg = rospy.wait_for_message('joint_states', JointState, TIMEOUT)
         return msg if set(msg.name) == set(names) else None
-    msg = wait_until(arm_message, 'an arm message on joint_states')
+    msg = wait_for(arm_message, 'an arm message on joint_states')
     return np.array([msg.position[msg.name.index(n)] for n in names]), msg
 
 
@@ -226,7 +215,7 @@ class JointTrajectoryTest(DriverTestBase):
         self.move_to(HOME)
         self.assertTrue(self.driver.slider(0.5).success)
         self.assertFalse(self.driver.slider(1.5).success)
-        wait_until(lambda: abs(rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data - 0.5) < 1e-6,
+        wait_for(lambda: abs(rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data - 0.5) < 1e-6,
                    'speed_scaling_factor 0.5')
         start = time.monotonic()
         self.move_to(AWAY, seconds=1.0)
@@ -282,7 +271,7 @@ class RobotTest(DriverTestBase):
 
     def test_power_off_refuses_commands_and_set_mode_brings_it_back(self):
         self.assertEqual(self.driver.power_off().message, 'Powering off')
-        wait_until(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
+        wait_for(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
                    'robot_program_running false')
         mode = rospy.wait_for_message(HW + 'robot_mode', RobotMode, TIMEOUT)
         self.assertEqual(mode.mode, RobotMode.POWER_OFF)
@@ -296,7 +285,7 @@ class RobotTest(DriverTestBase):
         self.assertTrue(self.driver.set_mode.get_result().success)
         self.assertEqual(self.driver.get_robot_mode().robot_mode.mode, RobotMode.RUNNING)
         self.assertTrue(rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data)
-        wait_until(lambda: self.driver.controller_states()['scaled_pos_joint_traj_controller'] == 'running',
+        wait_for(lambda: self.driver.controller_states()['scaled_pos_joint_traj_controller'] == 'running',
                    'the controller_stopper starts the controller again')
         self.move_to(HOME)
 
@@ -344,7 +333,7 @@ class RobotTest(DriverTestBase):
         client.send_goal(joint_goal(JOINTS, [(1.5, AWAY)]))
         time.sleep(0.5)
         self.assertTrue(self.driver.pause().success)
-        wait_until(lambda: rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data == 0.0,
+        wait_for(lambda: rospy.wait_for_message('speed_scaling_factor', Float64, TIMEOUT).data == 0.0,
                    'speed_scaling_factor 0 while paused')
         time.sleep(0.3)  # the joints settle on the held command (servoj's lookahead time, 0.03 s)
         held, _ = arm_positions(self.prefix)
@@ -373,7 +362,7 @@ class RobotTest(DriverTestBase):
             response = self.driver.set_io(SetIORequest(fun=SetIORequest.FUN_SET_DIGITAL_OUT,
                                                        pin=SetIORequest.PIN_DOUT3, state=state))
             self.assertTrue(response.success)
-            wait_until(lambda: rospy.wait_for_message(HW + 'io_states', IOStates, TIMEOUT)
+            wait_for(lambda: rospy.wait_for_message(HW + 'io_states', IOStates, TIMEOUT)
                        .digital_out_states[3].state == bool(state), 'digital out 3 = %g' % state)
         self.assertFalse(self.driver.set_io(SetIORequest(fun=SetIORequest.FUN_SET_DIGITAL_OUT, pin=40,
                                                          state=1.0)).success)
@@ -382,15 +371,15 @@ class RobotTest(DriverTestBase):
         self.move_to(HOME)
         rostest_helpers.wait_for_subscribers(self.driver.script)
         self.driver.script.publish(String(data='movej([%s], a=1.4, v=1.05)' % ', '.join('%g' % v for v in AWAY)))
-        wait_until(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
+        wait_for(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
                    'the script replaces the External Control program')
-        wait_until(lambda: np.allclose(arm_positions(self.prefix)[0], AWAY, atol=1e-3), 'movej reaches its target')
+        wait_for(lambda: np.allclose(arm_positions(self.prefix)[0], AWAY, atol=1e-3), 'movej reaches its target')
         self.assertEqual(self.driver.controller_states()['scaled_pos_joint_traj_controller'], 'stopped')
         response = self.driver.resend()
         self.assertTrue(response.success, response.message)
-        wait_until(lambda: rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
+        wait_for(lambda: rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
                    'robot_program_running after resend_robot_program')
-        wait_until(lambda: self.driver.controller_states()['scaled_pos_joint_traj_controller'] == 'running',
+        wait_for(lambda: self.driver.controller_states()['scaled_pos_joint_traj_controller'] == 'running',
                    'the controller runs again')
         self.move_to(HOME)
 
@@ -476,7 +465,7 @@ class ModelAlongTrajectoryTest(DriverTestBase):
             if self.prefix + 'finger_joint' in msg.name:
                 finger.update(zip(msg.name, msg.position))
             return finger
-        wait_until(finger_message, 'finger_joint on joint_states')
+        wait_for(finger_message, 'finger_joint on joint_states')
         # robot_state_publisher turns some joint_states messages into TF (at its publish_frequency)
         # and tf2 interpolates between them: compare at the stamps of its own arm transforms,
         # with the joint_states message of each such stamp, after the motion (TF keeps 10 s).
