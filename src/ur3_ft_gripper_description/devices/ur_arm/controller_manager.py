@@ -115,28 +115,20 @@ class ControllerManager(object):
                             % strictness)
             strictness = BEST_EFFORT
         to_stop, to_start = [], []
-        for name in stop:
-            controller = self.controllers.get(name)
-            if controller is None or not controller.running:
-                problem = ('Could not stop controller with name %s because no controller with this name exists'
-                           % name if controller is None else
-                           'Could not stop controller %s since it is not running' % name)
-                if strictness == STRICT:
-                    return False, problem
-                warnings.append(problem)
-                continue
-            to_stop.append(controller)
-        for name in start:
-            controller = self.controllers.get(name)
-            if controller is None or (controller.running and controller not in to_stop):
-                problem = ('Could not start controller with name %s because no controller with this name exists'
-                           % name if controller is None else
-                           'Could not start controller %s since it is already running' % name)
-                if strictness == STRICT:
-                    return False, problem
-                warnings.append(problem)
-                continue
-            to_start.append(controller)
+        for names, chosen, verb, unusable, state_problem in (
+                (stop, to_stop, 'stop', lambda c: not c.running, 'since it is not running'),
+                (start, to_start, 'start', lambda c: c.running and c not in to_stop, 'since it is already running')):
+            for name in names:
+                controller = self.controllers.get(name)
+                if controller is None or unusable(controller):
+                    problem = ('Could not %s controller with name %s because no controller with this name exists'
+                               % (verb, name) if controller is None else
+                               'Could not %s controller %s %s' % (verb, name, state_problem))
+                    if strictness == STRICT:
+                        return False, problem
+                    warnings.append(problem)
+                    continue
+                chosen.append(controller)
         after = [c for c in self.controllers.values() if (c.running and c not in to_stop) or c in to_start]
         claimed = {}
         for controller in after:
