@@ -1,7 +1,9 @@
 """The ROS master restarted under the simulated devices: each node exits with one clear line and
 roslaunch (respawn="true") starts it again on the new master (a real rosmaster killed and started
 again on the same port)."""
+import os
 import subprocess
+import sys
 import tempfile
 
 from conftest import stop, topic_message, wait_for
@@ -123,6 +125,25 @@ def test_a_node_started_before_the_master_waits_for_it(master):
     output = tail(log, chars=10 ** 7)
     assert output.count('waiting for the ROS master') == 1, output
     assert 'Traceback' not in output, output
+
+
+def test_a_publishing_loop_stops_before_rospy_closes_its_topics(master):
+    """rospy closes a node's topics before its is_shutdown() turns True; node_loop's loop must not
+    publish in between (the node here holds that window open for a second)."""
+    log = tempfile.NamedTemporaryFile('w+', suffix='.log')
+    node = subprocess.Popen([sys.executable, os.path.join(os.path.dirname(__file__), 'slow_closing_publisher.py')],
+                            stdout=log, stderr=subprocess.STDOUT, env=master.env)
+    try:
+        assert 'data:' in (topic_message('/count', master.env, timeout=60) or ''), tail(log)
+        master.kill()
+        master.start()
+        node.wait(timeout=60)
+    finally:
+        stop(node)
+    output = tail(log, chars=10 ** 7)
+    assert node.returncode == 1, output
+    assert output.count('was restarted') == 1, output
+    assert 'Traceback' not in output and 'closed topic' not in output, output
 
 
 def system_state_or_empty(master_uri):

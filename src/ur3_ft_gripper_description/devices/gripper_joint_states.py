@@ -73,13 +73,14 @@ def run(rospy):
         return 1
     table = JointTable(fingers, scale)
     publisher = rospy.Publisher('gripper/joint_states', JointState, queue_size=10)
+    gate = node_loop.PublishGate(rospy)
 
     def on_status(msg):
         state = JointState()
         state.header.stamp = rospy.Time.now()
         state.name = [table.joint_name]
         state.position = [table.angle(msg.gPO)]
-        publisher.publish(state)
+        gate.call(publisher.publish, state)
 
     rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, on_status,
                      queue_size=10)

@@ -49,6 +49,34 @@ def main(name, run):
         return 1
 
 
+class PublishGate(object):
+    """Work that publishes goes through here, and none runs once rospy starts closing topics.
+
+    rospy closes every topic in a pre-shutdown hook and only then says
+    is_shutdown(); a publish() in between raises "publish() to a closed topic".
+    Client shutdown hooks run before that hook: this one closes the gate, under
+    the lock the work holds, so work in progress ends first and none starts
+    after. The lock is re-entrant because a signal handler (Ctrl-C) runs the
+    hooks in the thread that may hold it.
+    """
+
+    def __init__(self, rospy):
+        self._lock = threading.RLock()
+        self._open = True
+        rospy.on_shutdown(self._close)
+
+    def _close(self):
+        with self._lock:
+            self._open = False
+
+    def call(self, work, *args):
+        """work(*args) while the node runs; its result, or None once shutdown has begun."""
+        with self._lock:
+            if self._open:
+                return work(*args)
+        return None
+
+
 def watch_master(rospy, period=MASTER_CHECK_PERIOD):
     """Shut this node down with one fatal line when the master is restarted.
 
@@ -86,15 +114,17 @@ def run_at_rate(rospy, hz, step, on_time_jump=None):
     """Call `step()` `hz` times a second until rospy shuts down; returns the exit status.
 
     Calls `on_time_jump()` when ROS time jumps back (a bag or simulation restarted).
+    No `step()` runs once shutdown has begun (PublishGate).
     """
     master = watch_master(rospy)
+    gate = PublishGate(rospy)
     # Everything made so far (modules, message classes, the model) lives as long as
     # the node: out of the collector's reach, a full collection no longer stops
     # the loop for ~20 ms (more on a loaded machine), which showed as message gaps.
     gc.freeze()
     rate = rospy.Rate(hz)
     while not rospy.is_shutdown():
-        step()
+        gate.call(step)
         try:
             rate.sleep()
         except rospy.ROSTimeMovedBackwardsException:
@@ -106,7 +136,10 @@ def run_at_rate(rospy, hz, step, on_time_jump=None):
 
 
 def spin(rospy):
-    """rospy.spin() for a callback-only node, with the master watch; returns the exit status."""
+    """rospy.spin() for a callback-only node, with the master watch; returns the exit status.
+
+    Callbacks that publish do so through a PublishGate made before they subscribe.
+    """
     master = watch_master(rospy)
     gc.freeze()
     rospy.spin()

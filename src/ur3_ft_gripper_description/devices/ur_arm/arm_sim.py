@@ -34,7 +34,7 @@ import numpy as np
 
 from .. import sim_params
 from ..node_loop import main as node_main
-from ..node_loop import watch_master
+from ..node_loop import run_at_rate
 from . import controller_manager as cm
 from . import joints
 from . import robot_state as rs
@@ -992,19 +992,16 @@ def main():
         except sim_params.ParamError as exc:
             rospy.logfatal('%s: %s' % (NODE, exc))
             return 1
-        master = watch_master(rospy)
-        period = 1.0 / sim.loop_hz
-        rate = rospy.Rate(sim.loop_hz)
-        last = rospy.get_time()
-        while not rospy.is_shutdown():
+        longest_step = 10.0 / sim.loop_hz
+        clock = {'last': rospy.get_time()}
+
+        def step():
             now = rospy.get_time()
-            sim.step(min(max(now - last, 0.0), 10 * period))
-            last = now
-            try:
-                rate.sleep()
-            except rospy.ROSTimeMovedBackwardsException:
-                last = rospy.get_time()
-            except rospy.ROSInterruptException:
-                break
-        return 1 if master['restarted'] else 0
+            sim.step(min(max(now - clock['last'], 0.0), longest_step))
+            clock['last'] = now
+
+        def restart_clock():
+            clock['last'] = rospy.get_time()
+
+        return run_at_rate(rospy, sim.loop_hz, step, on_time_jump=restart_clock)
     return node_main(NODE, run)
