@@ -379,6 +379,64 @@ def test_jacobian_and_inverse_kinematics_agree_with_the_model(configured_model):
     assert arm.inverse(far, home) is None
 
 
+# -- Cartesian motions ----------------------------------------------------------------
+
+HOME = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0])
+
+
+def test_cartesian_path_runs_along_the_line_between_its_waypoints(configured_model):
+    from transforms3d.quaternions import mat2quat
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+    from ur3_ft_gripper_description.devices.ur_arm.cartesian import PATH_STEP, Waypoint, joint_path
+    arm = ArmKinematics(configured_model('ur5e', True, True).text, JOINTS)
+    start = arm.forward(HOME)
+    end = start[:3, 3] + [0.10, 0.0, -0.05]
+    points = joint_path(arm, [Waypoint(1.0, tuple(end), tuple(mat2quat(start[:3, :3])))], HOME)
+    assert len(points) == round(1.0 / PATH_STEP) and points[-1].time == pytest.approx(1.0)
+    for point in points:
+        # Not only the corners: every step of the path is on the line, the orientation held.
+        pose = arm.forward(point.positions)
+        assert np.allclose(pose[:3, 3], start[:3, 3] + point.time * (end - start[:3, 3]), atol=1e-5)
+        assert np.allclose(pose[:3, :3], start[:3, :3], atol=1e-5)
+
+
+@pytest.mark.parametrize('waypoints, text', [
+    ([], 'no points'),
+    ([(1.0, (0.3, 0.1, 0.4), (2.0, 0.0, 0.0, 0.0))], 'illegal quaternion'),
+    ([(1.0, (0.3, float('nan'), 0.4), (1.0, 0.0, 0.0, 0.0))], 'NaN'),
+    ([(0.0, (0.3, 0.1, 0.4), (1.0, 0.0, 0.0, 0.0))], 'strictly increasing'),
+    ([(1.0, (3.0, 0.0, 0.4), (1.0, 0.0, 0.0, 0.0))], 'out of reach'),
+], ids=['empty', 'quaternion', 'nan', 'time', 'reach'])
+def test_cartesian_paths_the_driver_refuses_are_invalid_goal(configured_model, waypoints, text):
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+    from ur3_ft_gripper_description.devices.ur_arm.cartesian import Waypoint, joint_path
+    arm = ArmKinematics(configured_model('ur5e', True, True).text, JOINTS)
+    assert_refused('INVALID_GOAL', text, lambda: joint_path(arm, [Waypoint(*w) for w in waypoints], HOME))
+
+
+def test_twist_moves_the_tool_by_the_twist_and_holds_what_is_not_commanded(configured_model):
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+    from ur3_ft_gripper_description.devices.ur_arm.cartesian import TwistFollower
+    arm = ArmKinematics(configured_model('ur5e', True, True).text, JOINTS)
+    follower = TwistFollower(arm)
+    start = arm.forward(HOME)
+    q = HOME.copy()
+    for _ in range(500):  # 1 s at 500 Hz: 5 cm along y, a tenth of a radian about z
+        q = follower.step(q, np.array([0.0, 0.05, 0.0, 0.0, 0.0, 0.1]), 0.002)
+    pose = arm.forward(q)
+    assert np.allclose(pose[:3, 3], start[:3, 3] + [0.0, 0.05, 0.0], atol=1e-6)
+    expected = np.array([[np.cos(0.1), -np.sin(0.1), 0.0], [np.sin(0.1), np.cos(0.1), 0.0], [0.0, 0.0, 1.0]])
+    assert np.allclose(pose[:3, :3], expected.dot(start[:3, :3]), atol=1e-6)
+
+
+def test_a_urscript_pose_is_a_position_and_a_rotation_vector():
+    from ur3_ft_gripper_description.devices.ur_arm.cartesian import pose_from_ur_pose
+    pose = pose_from_ur_pose([0.1, -0.2, 0.3, 0.0, 0.0, math.pi / 2])
+    assert np.allclose(pose[:3, 3], [0.1, -0.2, 0.3])
+    assert np.allclose(pose[:3, :3], [[0, -1, 0], [1, 0, 0], [0, 0, 1]], atol=1e-12)
+    assert np.allclose(pose_from_ur_pose([0.0] * 6), np.eye(4))
+
+
 # -- URScript ---------------------------------------------------------------------------
 
 def test_script_parsing():
@@ -432,7 +490,7 @@ def settings_params(configured_model, **changes):
 
 
 def test_settings_from_the_driver_configuration(configured_model):
-    from ur3_ft_gripper_description.devices.ur_arm.arm_sim import read_settings
+    from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
     settings = read_settings(settings_params(configured_model))
     assert settings.loop_hz == 500 and settings.e_series and settings.joints == JOINTS
     assert settings.robot.program_running
@@ -449,7 +507,7 @@ def test_settings_from_the_driver_configuration(configured_model):
 ], ids=['config', 'controller', 'mode', 'positions', 'beyond-limits', 'no-model', 'prefix'])
 def test_bad_settings_are_one_line(configured_model, changes, words):
     from ur3_ft_gripper_description.devices import sim_params
-    from ur3_ft_gripper_description.devices.ur_arm.arm_sim import read_settings
+    from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
     with pytest.raises(sim_params.ParamError) as caught:
         read_settings(settings_params(configured_model, **changes))
     message = str(caught.value)

@@ -35,12 +35,16 @@ import numpy as np
 from .. import sim_params
 from ..node_loop import main as node_main
 from ..node_loop import run_at_rate
+from transforms3d.quaternions import mat2quat
+
+from . import cartesian
 from . import controller_manager as cm
 from . import joints
 from . import robot_state as rs
 from . import urscript
-from .arm_kinematics import ArmKinematics, pose_error
-from .trajectory import GoalError, Point, Spline
+from .dashboard import DashboardServices
+from .settings import read_settings
+from .trajectory import GoalError, Point
 from .trajectory_controller import TrajectoryController
 
 NODE = 'ur_hardware_interface'
@@ -63,12 +67,7 @@ VELOCITY_GROUP_TYPE = 'velocity_controllers/JointGroupVelocityController'
 TWIST_TYPE = 'ros_controllers_cartesian/TwistController'
 E_SERIES_SOFTWARE = (5, 12, 0, 0)
 CB3_SOFTWARE = (3, 15, 7, 0)
-# Step between two Cartesian points turned into joint positions, s.
-CARTESIAN_STEP = 0.02
 SET_MODE_TIMEOUT = 30.0
-# How far (m, rad) the twist controller's commanded pose may run ahead of the tool before it is dropped.
-TWIST_CATCH_UP = 0.01
-TWIST_NEWTON_STEPS = 4
 # The read-only controllers of the config and what each publishes.
 READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_torque_sensor_controller')
 
@@ -86,7 +85,6 @@ class ArmSim(object):
         from std_srvs.srv import Trigger
         from trajectory_msgs.msg import JointTrajectory
         from ur_dashboard_msgs import msg as dash_msg
-        from ur_dashboard_msgs import srv as dash_srv
         from ur_dashboard_msgs.msg import SetModeAction
         from ur_msgs.msg import IOStates, ToolDataMsg
         from control_msgs.srv import QueryTrajectoryState
@@ -122,7 +120,7 @@ class ArmSim(object):
         self.goal_handles = {}       # (controller, goal id) -> ServerGoalHandle
         self.group_velocity = np.zeros(6)
         self.twist = np.zeros(6)
-        self.twist_pose = None       # the twist controller's commanded tool pose (4x4), while it runs
+        self.twist_follower = cartesian.TwistFollower(self.arm)
         self.twisting = False
         self.script_move = None      # (JointMove, elapsed s) of a movej from script_command
         self.script_queue = []
@@ -167,30 +165,7 @@ class ArmSim(object):
                            for name in self.streaming_controllers}
 
         # -- the hardware interface's services and topics
-        for name, (command, expected) in rs.DASHBOARD_TRIGGERS.items():
-            rospy.Service('~dashboard/' + name, Trigger, self._trigger(command, expected))
-        rospy.Service('~dashboard/connect', Trigger, lambda req: (True, 'Connected: Universal Robots Dashboard '
-                                                                    'Server (simulated)'))
-        rospy.Service('~dashboard/add_to_log', dash_srv.AddToLog, lambda req: self._answer(
-            'addToLog ' + req.message, '(Added log message|No log message to add)$'))
-        rospy.Service('~dashboard/popup', dash_srv.Popup, lambda req: self._answer(
-            'popup ' + req.message, 'showing popup'))
-        rospy.Service('~dashboard/load_program', dash_srv.Load, lambda req: self._answer(
-            'load ' + req.filename, 'Loading program: .+'))
-        rospy.Service('~dashboard/load_installation', dash_srv.Load, lambda req: self._answer(
-            'load installation ' + req.filename, 'Loading installation: .+'))
-        rospy.Service('~dashboard/raw_request', dash_srv.RawRequest, lambda req: (self._dashboard(req.query),))
-        rospy.Service('~dashboard/quit', dash_srv.GetLoadedProgram, lambda req: (
-            self._dashboard('quit'), '', True))
-        rospy.Service('~dashboard/get_loaded_program', dash_srv.GetLoadedProgram, self._get_loaded_program)
-        rospy.Service('~dashboard/get_robot_mode', dash_srv.GetRobotMode, self._get_robot_mode)
-        rospy.Service('~dashboard/get_safety_mode', dash_srv.GetSafetyMode, self._get_safety_mode)
-        rospy.Service('~dashboard/program_running', dash_srv.IsProgramRunning, self._program_running)
-        rospy.Service('~dashboard/program_saved', dash_srv.IsProgramSaved, self._program_saved)
-        rospy.Service('~dashboard/program_state', dash_srv.GetProgramState, self._program_state)
-        if self.e_series:
-            rospy.Service('~dashboard/is_in_remote_control', dash_srv.IsInRemoteControl, lambda req: (
-                self._dashboard('is in remote control'), True, True))
+        self.dashboard = DashboardServices(rospy, self.robot, self.lock, self.e_series)
         rospy.Service('~hand_back_control', Trigger, lambda req: self._locked(self.robot.hand_back_control))
         rospy.Service('~resend_robot_program', Trigger, self._resend_robot_program)
         rospy.Service('~set_speed_slider', ur_srv.SetSpeedSliderFraction, self._set_speed_slider)
@@ -252,52 +227,6 @@ class ArmSim(object):
     def _locked(self, call, *args):
         with self.lock:
             return call(*args)
-
-    def _dashboard(self, command):
-        with self.lock:
-            return self.robot.dashboard(command)
-
-    def _answer(self, command, expected):
-        answer = self._dashboard(command)
-        return answer, rs.answer_matches(answer, expected)
-
-    def _trigger(self, command, expected):
-        def call(request):
-            answer = self._dashboard(command)
-            return rs.answer_matches(answer, expected), answer
-        return call
-
-    def _get_loaded_program(self, request):
-        answer = self._dashboard('get loaded program')
-        name = answer[len('Loaded program: '):] if answer.startswith('Loaded program: ') else ''
-        return answer, name, bool(name)
-
-    def _get_robot_mode(self, request):
-        with self.lock:
-            mode = self.robot.robot_mode
-            answer = self.robot.dashboard('robotmode')
-        return self.msg['RobotMode'](mode=getattr(self.msg['RobotMode'], mode)), answer, True
-
-    def _get_safety_mode(self, request):
-        with self.lock:
-            mode = self.robot.safety_mode
-            answer = self.robot.dashboard('safetymode')
-        return self.msg['SafetyMode'](mode=getattr(self.msg['SafetyMode'], mode)), answer, True
-
-    def _program_running(self, request):
-        answer = self._dashboard('running')
-        return answer, answer.endswith('true'), True
-
-    def _program_saved(self, request):
-        answer = self._dashboard('isProgramSaved')
-        saved, _, name = answer.partition(' ')
-        return answer, name, saved == 'true', True
-
-    def _program_state(self, request):
-        from ur_dashboard_msgs.msg import ProgramState
-        answer = self._dashboard('programState')
-        state, _, name = answer.partition(' ')
-        return ProgramState(state=state), name, answer, True
 
     def _set_speed_slider(self, request):
         ok, message = self._locked(self.robot.set_speed_slider, request.speed_slider_fraction)
@@ -544,44 +473,11 @@ class ArmSim(object):
         return on_goal
 
     def _cartesian_points(self, points, start):
-        """Joint-space points for a Cartesian trajectory in the base frame, by IK along the interpolated path."""
-        from transforms3d.quaternions import quat2mat
-        if not points:
-            raise GoalError('INVALID_GOAL', 'The Cartesian trajectory has no points')
-        poses, times = [self.arm.forward(start)], [0.0]
-        for index, point in enumerate(points):
-            q = point.pose.orientation
-            p = point.pose.position
-            values = (q.w, q.x, q.y, q.z, p.x, p.y, p.z, point.time_from_start.to_sec())
-            if not all(math.isfinite(v) for v in values):
-                raise GoalError('INVALID_GOAL', 'Point %d holds a NaN or infinite value' % index)
-            norm = math.sqrt(q.w ** 2 + q.x ** 2 + q.y ** 2 + q.z ** 2)
-            if abs(norm - 1.0) > 1e-3:
-                raise GoalError('INVALID_GOAL', 'Point %d has an illegal quaternion (norm %.4f, not 1)' % (index, norm))
-            if values[-1] <= times[-1]:
-                raise GoalError('INVALID_GOAL', 'Point %d: times must be strictly increasing (and above 0)' % index)
-            pose = np.eye(4)
-            pose[:3, :3] = quat2mat((q.w / norm, q.x / norm, q.y / norm, q.z / norm))
-            pose[:3, 3] = (p.x, p.y, p.z)
-            poses.append(pose)
-            times.append(values[-1])
-        result, seed = [], start
-        for i in range(1, len(poses)):
-            steps = max(1, int(math.ceil((times[i] - times[i - 1]) / CARTESIAN_STEP)))
-            for k in range(1, steps + 1):
-                fraction = float(k) / steps
-                target = _interpolate_pose(poses[i - 1], poses[i], fraction)
-                joints = self.arm.inverse(target, seed)
-                if joints is None:
-                    raise GoalError('INVALID_GOAL', 'Point %d (%.3f, %.3f, %.3f) is out of reach of the arm '
-                                    '(no inverse kinematics solution near the path)' % (
-                                        i - 1, poses[i][0, 3], poses[i][1, 3], poses[i][2, 3]))
-                if np.max(np.abs(joints - seed)) > 0.5:
-                    raise GoalError('INVALID_GOAL', 'Point %d: the path passes a singularity or changes the '
-                                    'arm configuration' % (i - 1))
-                result.append(Point(times[i - 1] + fraction * (times[i] - times[i - 1]), joints))
-                seed = joints
-        return result
+        """Joint-space points for a Cartesian trajectory (its points in the base frame)."""
+        return cartesian.joint_path(self.arm, [cartesian.Waypoint(
+            p.time_from_start.to_sec(), (p.pose.position.x, p.pose.position.y, p.pose.position.z),
+            (p.pose.orientation.w, p.pose.orientation.x, p.pose.orientation.y, p.pose.orientation.z))
+            for p in points], start)
 
     # -- velocity and twist -------------------------------------------------------------------
 
@@ -637,14 +533,7 @@ class ArmSim(object):
         if name == 'movej':
             target, a, v, t = urscript.movej_arguments(statement)
             if isinstance(target, urscript.Pose):
-                from transforms3d.axangles import axangle2mat
-                pose = np.eye(4)
-                vector = np.asarray(target[3:], dtype=float)
-                angle = float(np.linalg.norm(vector))
-                if angle > 0:
-                    pose[:3, :3] = axangle2mat(vector / angle, angle)
-                pose[:3, 3] = target[:3]
-                target = self.arm.inverse(pose, self.q)
+                target = self.arm.inverse(cartesian.pose_from_ur_pose(target), self.q)
                 if target is None:
                     self.rospy.logerr('script_command: movej: the pose is out of reach; program stopped')
                     self.script_queue = []
@@ -685,7 +574,7 @@ class ArmSim(object):
                 result.success, result.message = False, str(exc)
                 return self.set_mode.set_aborted(result, result.message)
         for command, wait_for in steps:
-            self._dashboard(command)
+            self.dashboard.command(command)
             if wait_for is not None and not self._wait(lambda: self.robot.robot_mode == wait_for):
                 if self.set_mode.is_preempt_requested():
                     return self.set_mode.set_preempted()
@@ -771,7 +660,7 @@ class ArmSim(object):
         self.limit_factor = 1.0
         command = self._controller_command(dt)
         if not self.twisting:
-            self.twist_pose = None
+            self.twist_follower.reset()
         return command
 
     def _controller_command(self, dt):
@@ -799,38 +688,8 @@ class ArmSim(object):
                 return self.q + self.group_velocity * dt
             if controller.type == TWIST_TYPE:
                 self.twisting = True
-                return self._twist_step(dt, scaling)
+                return self.twist_follower.step(self.q, self.twist * scaling, dt)
         return self.q
-
-    def _twist_step(self, dt, scaling):
-        """speedl: the tool's pose moves by the twist exactly (what is not commanded stays put).
-
-        The commanded pose is integrated in Cartesian space and the joints are
-        steered to it, so the linearisation's error does not pile up as drift.
-        """
-        from transforms3d.axangles import axangle2mat
-        actual = self.arm.forward(self.q)
-        if self.twist_pose is None:
-            self.twist_pose = actual
-        twist = self.twist * scaling
-        pose = self.twist_pose.copy()
-        pose[:3, 3] += twist[:3] * dt
-        angle = float(np.linalg.norm(twist[3:])) * dt
-        if angle > 0.0:
-            pose[:3, :3] = axangle2mat(twist[3:] / np.linalg.norm(twist[3:]), angle).dot(pose[:3, :3])
-        # A pose the joints cannot follow (limits, singularity) is not chased later: start from where they are.
-        if np.linalg.norm(pose_error(pose, actual)) > TWIST_CATCH_UP:
-            self.twist_pose = actual
-            return self.q
-        self.twist_pose = pose
-        # A few Newton steps: a long cycle (a loaded machine) must not leave a second-order error.
-        q = self.q.copy()
-        for _ in range(TWIST_NEWTON_STEPS):
-            error = pose_error(pose, self.arm.forward(q))
-            if np.linalg.norm(error) < 1e-10:
-                break
-            q = q + np.linalg.lstsq(self.arm.jacobian(q), error, rcond=None)[0]
-        return q
 
     def _script_step(self, dt):
         while self.script_move is None and self.script_queue:
@@ -859,7 +718,7 @@ class ArmSim(object):
         transform.child_frame_id = self.prefix + 'tool0_controller'
         transform.transform.translation.x, transform.transform.translation.y, transform.transform.translation.z = \
             pose[:3, 3]
-        w, x, y, z = _quaternion(pose[:3, :3])
+        w, x, y, z = mat2quat(pose[:3, :3])
         transform.transform.rotation.w, transform.transform.rotation.x = w, x
         transform.transform.rotation.y, transform.transform.rotation.z = y, z
         self.tf.sendTransform(transform)
@@ -904,85 +763,8 @@ class ArmSim(object):
         return getattr(self, '_published_running', None)
 
 
-class Settings(object):
-    """What the node's parameters and robot_description say, checked."""
-
-
-def read_settings(get_param):
-    """Settings from `get_param(name, default)` (rospy.get_param, or a dict in tests); ParamError on bad input."""
-    settings = Settings()
-    settings.prefix = sim_params.prefix(get_param)
-    ur_type = get_param('~ur_type', 'ur5e')
-    if not isinstance(ur_type, str) or not ur_type:
-        raise sim_params.ParamError('~ur_type=%r must be a UR model name, e.g. ur5e' % (ur_type,))
-    config_file = sim_params.existing_file(get_param, '~controller_config_file', None)
-    try:
-        sections, joints = cm.load_config(config_file)
-        settings.loop_hz = sim_params.number(get_param, '~loop_hz', _loop_hz(config_file), strictly_above=0.0)
-    except cm.ControllerConfigError as exc:
-        raise sim_params.ParamError('~controller_config_file: %s' % exc)
-    settings.joints = [name if name.startswith(settings.prefix) else settings.prefix + name for name in joints]
-    started = str(get_param('~controllers', '')).split()
-    stopped = get_param('~stopped_controllers', '')
-    stopped = str(stopped).split() if stopped else [n for n in sections if n not in started and
-                                                    sections[n]['type'] in cm.SIMULATED_TYPES]
-    try:
-        settings.manager = cm.ControllerManager(sections, settings.joints, started, stopped)
-    except cm.ControllerConfigError as exc:
-        raise sim_params.ParamError('~controllers / ~stopped_controllers: %s' % exc)
-    description = get_param('robot_description', None)
-    if not isinstance(description, str):
-        raise sim_params.ParamError('robot_description is not set: load the model first (load_ur_ft_gripper.launch)')
-    try:
-        settings.arm = ArmKinematics(description, settings.joints, settings.prefix + 'base',
-                                     settings.prefix + 'tool0')
-    except (ValueError, KeyError) as exc:
-        raise sim_params.ParamError('robot_description: %s (is ~prefix %r the model\'s?)' % (exc, settings.prefix))
-    # Elbow bent, tool pointing down: away from the singularities of the stretched arm.
-    initial = get_param('~initial_positions', [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0])
-    try:
-        initial = np.array(initial, dtype=float)
-    except (TypeError, ValueError):
-        initial = np.array([])
-    if initial.shape != (6,) or not np.all(np.isfinite(initial)) or np.any(initial < settings.arm.lower) or \
-            np.any(initial > settings.arm.upper):
-        raise sim_params.ParamError('~initial_positions=%r must be six finite joint positions within the '
-                                    'model\'s limits (rad)' % (get_param('~initial_positions', None),))
-    settings.initial = initial
-    settings.servo_lag = sim_params.number(get_param, '~servoj_lookahead_time', 0.03, minimum=0.0)
-    settings.e_series = ur_type.endswith('e')
-    mode = get_param('~robot_mode', 'RUNNING')
-    if mode not in rs.SELECTABLE_MODES:
-        raise sim_params.ParamError('~robot_mode=%r: use POWER_OFF, IDLE or RUNNING' % (mode,))
-    settings.robot = rs.RobotState(robot_mode=mode, program_running=bool(get_param('~program_running', True)),
-                                   headless=bool(get_param('~headless_mode', False)), e_series=settings.e_series)
-    return settings
-
-
-def _loop_hz(config_file):
-    import yaml
-    with open(config_file) as stream:
-        data = yaml.safe_load(stream)
-    return float(data.get('hardware_control_loop', {}).get('loop_hz', 125))
-
-
 def _prefixed(constraints, prefix):
     return {(prefix + key if isinstance(value, dict) else key): value for key, value in (constraints or {}).items()}
-
-
-def _interpolate_pose(start, end, fraction):
-    """Straight line and slerp between two 4x4 poses."""
-    from transforms3d.axangles import axangle2mat, mat2axangle
-    pose = np.eye(4)
-    pose[:3, 3] = start[:3, 3] + fraction * (end[:3, 3] - start[:3, 3])
-    axis, angle = mat2axangle(end[:3, :3].dot(start[:3, :3].T), unit_thresh=1e-5)
-    pose[:3, :3] = axangle2mat(axis, angle * fraction).dot(start[:3, :3])
-    return pose
-
-
-def _quaternion(rotation):
-    from transforms3d.quaternions import mat2quat
-    return mat2quat(rotation)
 
 
 def main():
