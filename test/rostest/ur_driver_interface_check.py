@@ -9,7 +9,6 @@ controller_manager at the root. It runs against the bring-up as a user
 starts it (ur_driver_interface.test: sim:=true ur_type:=ur5e, nothing else),
 so that a renamed, retyped or lost element fails here.
 """
-import time
 import unittest
 
 import rosgraph
@@ -21,7 +20,7 @@ from controller_manager_msgs.srv import ListControllers, SwitchController, Switc
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger
 
-from rostest_helpers import TIMEOUT
+from rostest_helpers import TIMEOUT, wait_for, wait_for_subscribers
 
 HW = '/ur_hardware_interface/'
 TRIGGER = 'std_srvs/Trigger'
@@ -151,15 +150,12 @@ class DocumentedInterfaceTest(unittest.TestCase):
         The node sets its interface up one element after the other: the graph is read
         again until it is complete, or TIMEOUT has passed.
         """
-        end = time.monotonic() + TIMEOUT
-        while True:
-            publishers, subscribers, types = self.graph()
-            missing = (['nobody publishes ' + topic for topic, _ in published if topic not in publishers] +
-                       ['nobody subscribes to ' + topic for topic, _ in subscribed if topic not in subscribers])
-            if not missing or time.monotonic() > end:
-                break
-            time.sleep(0.2)
-        self.assertEqual(missing, [])
+        def missing():
+            publishers, subscribers, _ = self.graph()
+            return (['nobody publishes ' + topic for topic, _ in published if topic not in publishers] +
+                    ['nobody subscribes to ' + topic for topic, _ in subscribed if topic not in subscribers])
+        wait_for(lambda: not missing(), lambda: ', '.join(missing()), step=0.2)
+        types = self.graph()[2]
         wrong = ['%s is %s, documented %s' % (topic, types.get(topic), kind) for topic, kind in published + subscribed
                  if types.get(topic) != kind]
         self.assertEqual(wrong, [])
@@ -201,16 +197,11 @@ class DocumentedInterfaceTest(unittest.TestCase):
         return {c.name: c.state for c in listing}[name]
 
     def wait_program_running(self, running):
-        end = time.monotonic() + TIMEOUT
-        while rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data != running:
-            self.assertLess(time.monotonic(), end, 'robot_program_running never became %s' % running)
-            time.sleep(0.05)
+        wait_for(lambda: rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data == running,
+                 'robot_program_running %s' % running)
 
     def wait_controller(self, name, state):
-        end = time.monotonic() + TIMEOUT
-        while self.controller_state(name) != state:
-            self.assertLess(time.monotonic(), end, '%s never became %s' % (name, state))
-            time.sleep(0.05)
+        wait_for(lambda: self.controller_state(name) == state, '%s %s' % (name, state))
 
     def test_program_stopped_stops_commanding_controllers_until_it_plays_again(self):
         trigger = {name: rospy.ServiceProxy(HW + name, Trigger) for name in
@@ -232,10 +223,7 @@ class DocumentedInterfaceTest(unittest.TestCase):
 
     def test_program_resent_after_a_script_hands_control_back(self):
         script = rospy.Publisher(HW + 'script_command', String, queue_size=1)
-        end = time.monotonic() + TIMEOUT
-        while script.get_num_connections() == 0:
-            self.assertLess(time.monotonic(), end, 'nobody subscribes to script_command')
-            time.sleep(0.05)
+        wait_for_subscribers(script)
         script.publish(String(data='movej([0, -1.57, 1.57, -1.57, -1.57, 0], a=1.4, v=1.05)'))
         self.wait_program_running(False)
         response = rospy.ServiceProxy(HW + 'resend_robot_program', Trigger)()
