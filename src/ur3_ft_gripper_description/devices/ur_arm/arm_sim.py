@@ -31,12 +31,11 @@ import math
 import threading
 
 import numpy as np
+from transforms3d.quaternions import mat2quat
 
 from .. import sim_params
 from ..node_loop import main as node_main
 from ..node_loop import run_at_rate
-from transforms3d.quaternions import mat2quat
-
 from . import cartesian
 from . import controller_manager as cm
 from . import joints
