@@ -30,8 +30,23 @@ no protective stops.
 import math
 import threading
 
+import actionlib
 import numpy as np
+import tf2_ros
+from cartesian_control_msgs.msg import FollowCartesianTrajectoryAction, FollowCartesianTrajectoryResult
+from control_msgs.msg import FollowJointTrajectoryAction, FollowJointTrajectoryResult, JointTrajectoryControllerState
+from control_msgs.srv import QueryTrajectoryState
+from controller_manager_msgs import srv as cm_srv
+from controller_manager_msgs.msg import ControllerState, HardwareInterfaceResources
+from geometry_msgs.msg import TransformStamped, Twist, WrenchStamped
+from sensor_msgs.msg import JointState
+from std_msgs.msg import Bool, Float64, Float64MultiArray, String
+from std_srvs.srv import SetBool, Trigger
+from trajectory_msgs.msg import JointTrajectory
 from transforms3d.quaternions import mat2quat
+from ur_dashboard_msgs.msg import RobotMode, SafetyMode, SetModeAction, SetModeFeedback, SetModeResult
+from ur_msgs import srv as ur_srv
+from ur_msgs.msg import Analog, Digital, IOStates, ToolDataMsg
 
 from .. import sim_params
 from ..node_loop import main as node_main
@@ -73,23 +88,6 @@ READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_
 
 class ArmSim(object):
     def __init__(self, rospy, get_param=None):
-        import actionlib
-        import tf2_ros
-        from cartesian_control_msgs.msg import FollowCartesianTrajectoryAction
-        from control_msgs.msg import FollowJointTrajectoryAction, JointTrajectoryControllerState
-        from controller_manager_msgs import srv as cm_srv
-        from geometry_msgs.msg import Twist, WrenchStamped
-        from sensor_msgs.msg import JointState
-        from std_msgs.msg import Bool, Float64, Float64MultiArray, String
-        from std_srvs.srv import Trigger
-        from trajectory_msgs.msg import JointTrajectory
-        from ur_dashboard_msgs import msg as dash_msg
-        from ur_dashboard_msgs.msg import SetModeAction
-        from ur_msgs.msg import IOStates, ToolDataMsg
-        from control_msgs.srv import QueryTrajectoryState
-        from std_srvs.srv import SetBool
-        from ur_msgs import srv as ur_srv
-
         self.rospy = rospy
         self.lock = threading.RLock()
         settings = read_settings(get_param or rospy.get_param)
@@ -131,20 +129,7 @@ class ArmSim(object):
         self.last_modes = None
         self.stopped_by_program = []
         self.finished = []           # (controller, goal handle, Outcome) to report outside self.lock
-
-        # -- the message classes the loop and the callbacks use
-        self.msg = dict(JointState=JointState, Float64=Float64, WrenchStamped=WrenchStamped, Bool=Bool,
-                        IOStates=IOStates, RobotMode=dash_msg.RobotMode, SafetyMode=dash_msg.SafetyMode,
-                        JointTrajectoryControllerState=JointTrajectoryControllerState)
-        from control_msgs.msg import FollowJointTrajectoryResult
-        from cartesian_control_msgs.msg import FollowCartesianTrajectoryResult
-        from geometry_msgs.msg import TransformStamped
-        from ur_msgs.msg import Analog, Digital
-        from ur_dashboard_msgs.msg import SetModeFeedback, SetModeResult
-        self.msg.update(FollowJointTrajectoryResult=FollowJointTrajectoryResult,
-                        FollowCartesianTrajectoryResult=FollowCartesianTrajectoryResult,
-                        TransformStamped=TransformStamped, Analog=Analog, Digital=Digital,
-                        SetModeFeedback=SetModeFeedback, SetModeResult=SetModeResult)
+        self.published_running = None
 
         # -- publishers
         self.joint_states = rospy.Publisher('joint_states', JointState, queue_size=10)
@@ -152,10 +137,9 @@ class ArmSim(object):
         self.wrench = rospy.Publisher('wrench', WrenchStamped, queue_size=10)
         self.io_states = rospy.Publisher('~io_states', IOStates, queue_size=10)
         self.tool_data = rospy.Publisher('~tool_data', ToolDataMsg, queue_size=10)
-        self.msg['ToolDataMsg'] = ToolDataMsg
         self.program_running_pub = rospy.Publisher('~robot_program_running', Bool, queue_size=1, latch=True)
-        self.robot_mode_pub = rospy.Publisher('~robot_mode', dash_msg.RobotMode, queue_size=1, latch=True)
-        self.safety_mode_pub = rospy.Publisher('~safety_mode', dash_msg.SafetyMode, queue_size=1, latch=True)
+        self.robot_mode_pub = rospy.Publisher('~robot_mode', RobotMode, queue_size=1, latch=True)
+        self.safety_mode_pub = rospy.Publisher('~safety_mode', SafetyMode, queue_size=1, latch=True)
         self.tf = tf2_ros.TransformBroadcaster()
         # joint_trajectory_controller's topics; the pass-through controllers have only their action.
         self.streaming_controllers = [name for name in self.trajectory_controllers
@@ -283,7 +267,6 @@ class ArmSim(object):
     # -- controller_manager ------------------------------------------------------------
 
     def _list_controllers(self, request):
-        from controller_manager_msgs.msg import ControllerState, HardwareInterfaceResources
         with self.lock:
             listing = self.manager.listing()
         return ([ControllerState(name=name, state=state, type=ctype,
@@ -337,9 +320,8 @@ class ArmSim(object):
     # -- trajectory controllers ------------------------------------------------------------
 
     def _result(self, name, code, message):
-        kind = 'FollowCartesianTrajectoryResult' if name in self.cartesian_controllers \
-            else 'FollowJointTrajectoryResult'
-        result_type = self.msg[kind]
+        result_type = FollowCartesianTrajectoryResult if name in self.cartesian_controllers \
+            else FollowJointTrajectoryResult
         return result_type(error_code=getattr(result_type, code), error_string=message)
 
     def _refuse(self, name, handle, code, message):
@@ -559,9 +541,9 @@ class ArmSim(object):
     # -- set_mode (robot_state_helper) ---------------------------------------------------------
 
     def _set_mode(self, goal):
-        result = self.msg['SetModeResult']()
-        names = {getattr(self.msg['RobotMode'], n): n for n in dir(self.msg['RobotMode'])
-                 if n.isupper() and isinstance(getattr(self.msg['RobotMode'], n), int)}
+        result = SetModeResult()
+        names = {getattr(RobotMode, n): n for n in dir(RobotMode)
+                 if n.isupper() and isinstance(getattr(RobotMode, n), int)}
         target = names.get(goal.target_robot_mode.mode)
         if target is None:
             result.success, result.message = False, 'Requested illegal mode.'
@@ -593,14 +575,14 @@ class ArmSim(object):
         self.set_mode.set_succeeded(result, result.message)
 
     def _wait(self, condition):
-        feedback = self.msg['SetModeFeedback']()
+        feedback = SetModeFeedback()
         end = self.rospy.get_time() + SET_MODE_TIMEOUT
         rate = self.rospy.Rate(20)
         while not self.rospy.is_shutdown() and self.rospy.get_time() < end:
             with self.lock:
                 done = condition()
-                feedback.current_robot_mode = getattr(self.msg['RobotMode'], self.robot.robot_mode)
-                feedback.current_safety_mode = getattr(self.msg['SafetyMode'], self.robot.safety_mode)
+                feedback.current_robot_mode = getattr(RobotMode, self.robot.robot_mode)
+                feedback.current_safety_mode = getattr(SafetyMode, self.robot.safety_mode)
             self.set_mode.publish_feedback(feedback)
             if done:
                 return True
@@ -703,15 +685,14 @@ class ArmSim(object):
         return target
 
     def _publish(self, q, qd, scaling, running, modes, io, state_samples, reading):
-        rospy, msg = self.rospy, self.msg
-        now = rospy.Time.now()
-        joint_state = msg['JointState'](name=self.joints, position=q.tolist(), velocity=qd.tolist(),
+        now = self.rospy.Time.now()
+        joint_state = JointState(name=self.joints, position=q.tolist(), velocity=qd.tolist(),
                                         effort=[0.0] * 6)
         joint_state.header.stamp = now
         if 'joint_state_controller' in reading:
             self.joint_states.publish(joint_state)
         pose = self.arm.forward(q)
-        transform = msg['TransformStamped']()
+        transform = TransformStamped()
         transform.header.stamp = now
         transform.header.frame_id = self.prefix + 'base'
         transform.child_frame_id = self.prefix + 'tool0_controller'
@@ -722,44 +703,41 @@ class ArmSim(object):
         transform.transform.rotation.y, transform.transform.rotation.z = y, z
         self.tf.sendTransform(transform)
         if 'speed_scaling_state_controller' in reading:
-            self.speed_scaling.publish(msg['Float64'](data=scaling))
-        wrench = msg['WrenchStamped']()
+            self.speed_scaling.publish(Float64(data=scaling))
+        wrench = WrenchStamped()
         wrench.header.stamp = now
         wrench.header.frame_id = self.prefix + 'tool0_controller'
         if 'force_torque_sensor_controller' in reading:
             self.wrench.publish(wrench)
         digital_in, digital_out, analog_in, analog_out, tool_voltage = io
-        self.io_states.publish(msg['IOStates'](
-            digital_in_states=[msg['Digital'](pin=i, state=s) for i, s in enumerate(digital_in)],
-            digital_out_states=[msg['Digital'](pin=i, state=s) for i, s in enumerate(digital_out)],
+        self.io_states.publish(IOStates(
+            digital_in_states=[Digital(pin=i, state=s) for i, s in enumerate(digital_in)],
+            digital_out_states=[Digital(pin=i, state=s) for i, s in enumerate(digital_out)],
             flag_states=[],
-            analog_in_states=[msg['Analog'](pin=i, domain=msg['Analog'].VOLTAGE, state=s)
+            analog_in_states=[Analog(pin=i, domain=Analog.VOLTAGE, state=s)
                               for i, s in enumerate(analog_in)],
-            analog_out_states=[msg['Analog'](pin=i, domain=msg['Analog'].CURRENT, state=s)
+            analog_out_states=[Analog(pin=i, domain=Analog.CURRENT, state=s)
                                for i, s in enumerate(analog_out)]))
-        self.tool_data.publish(msg['ToolDataMsg'](
-            tool_mode=msg['ToolDataMsg'].TOOL_RUNNING_MODE if modes[0] != rs.POWER_OFF
-            else msg['ToolDataMsg'].TOOL_IDLE_MODE, tool_output_voltage=tool_voltage))
-        if running != self.last_published_running():
-            self.program_running_pub.publish(msg['Bool'](data=running))
-            self._published_running = running
+        self.tool_data.publish(ToolDataMsg(
+            tool_mode=ToolDataMsg.TOOL_RUNNING_MODE if modes[0] != rs.POWER_OFF
+            else ToolDataMsg.TOOL_IDLE_MODE, tool_output_voltage=tool_voltage))
+        if running != self.published_running:
+            self.program_running_pub.publish(Bool(data=running))
+            self.published_running = running
         if modes != self.last_modes:
-            self.robot_mode_pub.publish(msg['RobotMode'](mode=getattr(msg['RobotMode'], modes[0])))
-            self.safety_mode_pub.publish(msg['SafetyMode'](mode=getattr(msg['SafetyMode'], modes[1])))
+            self.robot_mode_pub.publish(RobotMode(mode=getattr(RobotMode, modes[0])))
+            self.safety_mode_pub.publish(SafetyMode(mode=getattr(SafetyMode, modes[1])))
             self.last_modes = modes
         for name, sample in state_samples:
             if sample is None:
                 continue
-            state = msg['JointTrajectoryControllerState'](joint_names=self.joints)
+            state = JointTrajectoryControllerState(joint_names=self.joints)
             state.header.stamp = now
             state.desired.positions, state.desired.velocities = sample[0].tolist(), sample[1].tolist()
             state.actual.positions, state.actual.velocities = q.tolist(), qd.tolist()
             state.error.positions = (sample[0] - q).tolist()
             state.error.velocities = (sample[1] - qd).tolist()
             self.state_pubs[name].publish(state)
-
-    def last_published_running(self):
-        return getattr(self, '_published_running', None)
 
 
 def _prefixed(constraints, prefix):

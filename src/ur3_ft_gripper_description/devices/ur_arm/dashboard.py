@@ -5,6 +5,10 @@ and answers from the simulated robot's reply (robot_state.RobotState.dashboard)
 with the driver's success rule: the reply must match what the driver expects.
 """
 
+from std_srvs.srv import Trigger
+from ur_dashboard_msgs import srv as dash_srv
+from ur_dashboard_msgs.msg import ProgramState, RobotMode, SafetyMode
+
 from . import robot_state as rs
 
 
@@ -12,12 +16,7 @@ class DashboardServices(object):
     """Advertises the ~dashboard/* services of node `rospy` for `robot`, guarded by `lock`."""
 
     def __init__(self, rospy, robot, lock, e_series):
-        from std_srvs.srv import Trigger
-        from ur_dashboard_msgs import msg as dash_msg
-        from ur_dashboard_msgs import srv as dash_srv
-
         self.robot, self.lock = robot, lock
-        self.msg = dash_msg
         for name, (command, expected) in rs.DASHBOARD_TRIGGERS.items():
             rospy.Service('~dashboard/' + name, Trigger, self._trigger(command, expected))
         rospy.Service('~dashboard/connect', Trigger, lambda req: (True, 'Connected: Universal Robots Dashboard '
@@ -67,13 +66,13 @@ class DashboardServices(object):
         with self.lock:
             mode = self.robot.robot_mode
             answer = self.robot.dashboard('robotmode')
-        return self.msg.RobotMode(mode=getattr(self.msg.RobotMode, mode)), answer, True
+        return RobotMode(mode=getattr(RobotMode, mode)), answer, True
 
     def _get_safety_mode(self, request):
         with self.lock:
             mode = self.robot.safety_mode
             answer = self.robot.dashboard('safetymode')
-        return self.msg.SafetyMode(mode=getattr(self.msg.SafetyMode, mode)), answer, True
+        return SafetyMode(mode=getattr(SafetyMode, mode)), answer, True
 
     def _program_running(self, request):
         answer = self.command('running')
@@ -87,4 +86,4 @@ class DashboardServices(object):
     def _program_state(self, request):
         answer = self.command('programState')
         state, _, name = answer.partition(' ')
-        return self.msg.ProgramState(state=state), name, answer, True
+        return ProgramState(state=state), name, answer, True
