@@ -10,7 +10,6 @@ starts them again on the new master.
 """
 
 import gc
-import socket
 import sys
 import threading
 import xmlrpc.client
@@ -19,7 +18,7 @@ import xmlrpc.client
 MASTER_CHECK_PERIOD = 1.0
 
 # What a call to a master that is not (yet, or no longer) there raises.
-MASTER_UNREACHABLE = (OSError, socket.error, xmlrpc.client.Error)
+MASTER_UNREACHABLE = (OSError, xmlrpc.client.Error)
 
 
 def main(name, run):

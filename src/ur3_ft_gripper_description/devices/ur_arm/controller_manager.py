@@ -46,8 +46,8 @@ class ControllerConfigError(ValueError):
     """The controller configuration or the controller lists cannot be used."""
 
 
-def load_config(path):
-    """The controller sections of a <ur_type>_controllers.yaml: {name: section}, and the joints."""
+def read_config(path):
+    """A <ur_type>_controllers.yaml as parsed, checked to be ur_robot_driver's; ControllerConfigError if not."""
     try:
         with open(path) as stream:
             data = yaml.safe_load(stream)
@@ -56,10 +56,20 @@ def load_config(path):
     if not isinstance(data, dict) or 'ur_hardware_interface' not in data:
         raise ControllerConfigError('%s is not a ur_robot_driver controller configuration '
                                     '(no ur_hardware_interface section)' % path)
+    return data
+
+
+def controller_sections(data):
+    """The controller sections of a parsed configuration: {name: section}, and the joints."""
     joints = list(data['ur_hardware_interface'].get('joints', []))
     sections = {name: section for name, section in data.items()
                 if isinstance(section, dict) and 'type' in section}
     return sections, joints
+
+
+def load_config(path):
+    """The controller sections of a <ur_type>_controllers.yaml: {name: section}, and the joints."""
+    return controller_sections(read_config(path))
 
 
 class Controller(object):

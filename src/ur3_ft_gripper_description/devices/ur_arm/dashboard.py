@@ -5,11 +5,32 @@ and answers from the simulated robot's reply (robot_state.RobotState.dashboard)
 with the driver's success rule: the reply must match what the driver expects.
 """
 
+import re
+
 from std_srvs.srv import Trigger
 from ur_dashboard_msgs import srv as dash_srv
 from ur_dashboard_msgs.msg import ProgramState, RobotMode, SafetyMode
 
-from . import robot_state as rs
+
+# What ur_robot_driver's dashboard services send, and the answer each expects for success.
+DASHBOARD_TRIGGERS = {
+    'power_on': ('power on', r'Powering on'),
+    'power_off': ('power off', r'Powering off'),
+    'brake_release': ('brake release', r'Brake releasing'),
+    'play': ('play', r'Starting program'),
+    'pause': ('pause', r'Pausing program'),
+    'stop': ('stop', r'Stopped'),
+    'unlock_protective_stop': ('unlock protective stop', r'Protective stop releasing'),
+    'restart_safety': ('restart safety', r'Restarting safety'),
+    'close_popup': ('close popup', r'closing popup'),
+    'close_safety_popup': ('close safety popup', r'closing safety popup'),
+    'shutdown': ('shutdown', r'Shutting down'),
+    'clear_operational_mode': ('clear operational mode', r'No longer controlling the operational mode'),
+}
+
+
+def answer_matches(answer, expected):
+    return re.match(expected, answer) is not None
 
 
 class DashboardServices(object):
@@ -17,7 +38,7 @@ class DashboardServices(object):
 
     def __init__(self, rospy, robot, lock, e_series):
         self.robot, self.lock = robot, lock
-        for name, (command, expected) in rs.DASHBOARD_TRIGGERS.items():
+        for name, (command, expected) in DASHBOARD_TRIGGERS.items():
             rospy.Service('~dashboard/' + name, Trigger, self._trigger(command, expected))
         rospy.Service('~dashboard/connect', Trigger, lambda req: (True, 'Connected: Universal Robots Dashboard '
                                                                     'Server (simulated)'))
@@ -49,12 +70,12 @@ class DashboardServices(object):
 
     def _answer(self, command, expected):
         answer = self.command(command)
-        return answer, rs.answer_matches(answer, expected)
+        return answer, answer_matches(answer, expected)
 
     def _trigger(self, command, expected):
         def call(request):
             answer = self.command(command)
-            return rs.answer_matches(answer, expected), answer
+            return answer_matches(answer, expected), answer
         return call
 
     def _get_loaded_program(self, request):

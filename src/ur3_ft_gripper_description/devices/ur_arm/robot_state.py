@@ -16,7 +16,6 @@ The dashboard answers are the UR dashboard server's (Universal Robots'
 succeed when the answer matches what it expects.
 """
 
-import re
 
 # Robot mode names in ur_dashboard_msgs/RobotMode order of start-up.
 POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING = 'POWER_OFF', 'BOOTING', 'POWER_ON', 'IDLE', 'RUNNING'
@@ -175,9 +174,7 @@ class RobotState(object):
                 self._head_for(IDLE)
             return 'Powering on'
         if key == 'power off':
-            self._end_program()
-            self._target = None
-            self.robot_mode = POWER_OFF
+            self.power_off_quietly()
             return 'Powering off'
         if key == 'brake release':
             self._head_for(RUNNING)
@@ -264,27 +261,6 @@ class RobotState(object):
         self._end_program()
         self._target = None
         self.robot_mode = POWER_OFF
-
-
-# What ur_robot_driver's dashboard services send, and the answer each expects for success.
-DASHBOARD_TRIGGERS = {
-    'power_on': ('power on', r'Powering on'),
-    'power_off': ('power off', r'Powering off'),
-    'brake_release': ('brake release', r'Brake releasing'),
-    'play': ('play', r'Starting program'),
-    'pause': ('pause', r'Pausing program'),
-    'stop': ('stop', r'Stopped'),
-    'unlock_protective_stop': ('unlock protective stop', r'Protective stop releasing'),
-    'restart_safety': ('restart safety', r'Restarting safety'),
-    'close_popup': ('close popup', r'closing popup'),
-    'close_safety_popup': ('close safety popup', r'closing safety popup'),
-    'shutdown': ('shutdown', r'Shutting down'),
-    'clear_operational_mode': ('clear operational mode', r'No longer controlling the operational mode'),
-}
-
-
-def answer_matches(answer, expected):
-    return re.match(expected, answer) is not None
 
 
 def plan_set_mode(robot_mode, target, stop_program):

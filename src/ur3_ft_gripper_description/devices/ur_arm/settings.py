@@ -28,8 +28,10 @@ def read_settings(get_param):
         raise sim_params.ParamError('~ur_type=%r must be a UR model name, e.g. ur5e' % (ur_type,))
     config_file = sim_params.existing_file(get_param, '~controller_config_file', None)
     try:
-        sections, joints = cm.load_config(config_file)
-        settings.loop_hz = sim_params.number(get_param, '~loop_hz', _loop_hz(config_file), strictly_above=0.0)
+        config = cm.read_config(config_file)
+        sections, joints = cm.controller_sections(config)
+        config_hz = float(config.get('hardware_control_loop', {}).get('loop_hz', 125))
+        settings.loop_hz = sim_params.number(get_param, '~loop_hz', config_hz, strictly_above=0.0)
     except cm.ControllerConfigError as exc:
         raise sim_params.ParamError('~controller_config_file: %s' % exc)
     settings.joints = [name if name.startswith(settings.prefix) else settings.prefix + name for name in joints]
@@ -68,10 +70,3 @@ def read_settings(get_param):
     settings.robot = rs.RobotState(robot_mode=mode, program_running=bool(get_param('~program_running', True)),
                                    headless=bool(get_param('~headless_mode', False)), e_series=settings.e_series)
     return settings
-
-
-def _loop_hz(config_file):
-    import yaml
-    with open(config_file) as stream:
-        data = yaml.safe_load(stream)
-    return float(data.get('hardware_control_loop', {}).get('loop_hz', 125))

@@ -57,7 +57,6 @@ class TrajectoryController(object):
         self.wall = 0.0           # time since start, s, unscaled
         self.goal = None
         self.spline = None        # what is commanded: the goal's, or a stop, or None (hold the start)
-        self.hold_position = None
         self.limit_factor = 1.0   # < 1 while a scaled trajectory is slowed to respect velocity limits
 
     # -- goals -----------------------------------------------------------------
