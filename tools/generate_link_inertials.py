@@ -7,22 +7,16 @@ import os
 import sys
 
 import rospkg
+import yaml
 
-from ur3_ft_gripper_description import kinematics
-from ur3_ft_gripper_description.model import description, export, inertials
-
-
-def expanded(**options):
-    return kinematics.Model(description.to_xml(description.expand_model(export.model_mappings(**options))))
+from ur3_ft_gripper_description.model import inertials
 
 
 def main():
     package = rospkg.RosPack().get_path('ur3_ft_gripper_description')
     with open(os.path.join(package, 'config', 'robotiq_mass.yaml')) as f:
-        import yaml
         figures = yaml.safe_load(f)
-    links, densities = inertials.distribute(
-        expanded(), expanded(ft_sensor=False), figures, export.resolve_uri)
+    links, densities = inertials.compute_table(figures)
     out = os.path.join(package, 'config', 'link_inertials.yaml')
     inertials.write_yaml(out, links, densities)
     print('%s: %d links' % (out, len(links)))

@@ -168,6 +168,17 @@ HEADER = '''\
 '''
 
 
+def compute_table(figures):
+    """distribute() over the default model with and without the FT 300: what the stored table holds."""
+    # description imports this module: its functions are taken at call time.
+    from ur3_ft_gripper_description import kinematics
+    from ur3_ft_gripper_description.model import description, export
+
+    def expanded(**options):
+        return kinematics.Model(description.to_xml(description.expand_model(export.model_mappings(**options))))
+    return distribute(expanded(), expanded(ft_sensor=False), figures, export.resolve_uri)
+
+
 def write_yaml(path, links, densities):
     lines = [HEADER]
     lines.extend('#   %s: %.0f\n' % (name, densities[name]) for name in sorted(densities))

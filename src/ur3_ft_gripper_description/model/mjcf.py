@@ -65,10 +65,9 @@ def collision_matrix(mappings, path=None):
 
 
 class MjcfWriter(object):
-    def __init__(self, model, mesh_folder, mesh_prefix):
+    def __init__(self, model, mesh_folder):
         self.model = model
         self.mesh_folder = mesh_folder
-        self.mesh_prefix = mesh_prefix
         self.doc = minidom.Document()
         self.meshes = {}  # (path, scale) -> asset name
         self.asset = self.doc.createElement('asset')
@@ -86,8 +85,8 @@ class MjcfWriter(object):
         scale = tuple(geometry.scale or (1.0, 1.0, 1.0))
         key = (path, scale)
         if key not in self.meshes:
-            name = '%s%d_%s' % (self.mesh_prefix, len(self.meshes),
-                                re.sub(r'[^A-Za-z0-9_]', '_', os.path.splitext(os.path.basename(path))[0]))
+            name = '%d_%s' % (len(self.meshes),
+                              re.sub(r'[^A-Za-z0-9_]', '_', os.path.splitext(os.path.basename(path))[0]))
             mesh = trimesh.load(path, force='mesh')
             mesh.apply_scale(np.asarray(scale, dtype=float))
             out = os.path.join(self.mesh_folder, name + '.stl')
@@ -153,7 +152,7 @@ def export_mjcf(mappings, output, matrix_path=None):
     except OSError as e:
         raise description.DescriptionError('cannot write %s (%s): give -o a file in a folder you can write' % (
             output, e.strerror or e)) from None
-    writer = MjcfWriter(model, mesh_folder, '')
+    writer = MjcfWriter(model, mesh_folder)
     root = writer.element(writer.doc, 'mujoco', model=model.robot.name)
     writer.element(root, 'compiler', angle='radian', autolimits='true')
     root.appendChild(writer.asset)
