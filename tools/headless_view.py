@@ -142,6 +142,7 @@ class HeadlessView(object):
         self._xvfb = None
         self._launch = None
         self._log = None
+        self._log_start = 0
 
     def __enter__(self):
         return self
@@ -149,41 +150,45 @@ class HeadlessView(object):
     def __exit__(self, *exc):
         self.stop()
 
-    def open(self):
-        """Start Xvfb and the view launch; wait for RViz's window (and the sliders'); place them.
+    def show(self, path, robot_timeout=None):
+        """Start the view and save a screenshot once the robot shows in it; the Verdict.
 
-        RViz 1.14 with Mesa's software OpenGL under Xvfb now and then dies from
-        a signal while it creates its GL context (seen about once in fifteen
-        starts); that start is tried once more, and said so. A second crash,
-        or any other failure, is a ViewError.
+        RViz 1.14 with Mesa's software OpenGL under Xvfb now and then dies
+        from a signal in its first seconds: a segmentation fault as it creates
+        its GL context, or glibc's abort on a corrupted heap as it loads the
+        meshes, after its window has shown. Until the robot has shown, such a
+        death is a start-up crash: the view is started once more, and that is
+        said. A second crash, or any other failure, is a ViewError.
         """
         self._log = open(self.log_path, 'w')
         self._start_xvfb()
         try:
-            self._open()
+            return self._start_and_screenshot(path, robot_timeout)
         except RvizCrashed as crash:
             print('[headless_view] %s; starting the view once more' % crash, file=sys.stderr)
             self._stop_launch()  # the same Xvfb serves the second start
             self.rviz_window = self.sliders_window = None
-            self._open()
+            return self._start_and_screenshot(path, robot_timeout)
 
-    def _open(self):
+    def _start_and_screenshot(self, path, robot_timeout):
+        start = time.monotonic()
+        self._start_launch()
+        print('[headless_view] RViz up under Xvfb (%s) after %.0f s; waiting for the robot to show'
+              % (self.display, time.monotonic() - start), file=sys.stderr)
+        start = time.monotonic()
+        verdict = self._wait_for_robot(path, robot_timeout)
+        print('[headless_view] the robot showed after %.0f s' % (time.monotonic() - start), file=sys.stderr)
+        return verdict
+
+    def _start_launch(self):
+        """Start the view launch; wait for RViz's window (and the sliders'); place them."""
         self._log.flush()
-        log_start = self._log.tell()
+        self._log_start = self._log.tell()
         self._launch = subprocess.Popen(['roslaunch', PACKAGE, LAUNCH_FILE] + self.launch_args,
                                         stdout=self._log, stderr=subprocess.STDOUT, env=self.env)
         deadline = time.monotonic() + self.settings['windows_timeout']
         while True:
-            if self._launch.poll() is not None:
-                self._log.flush()
-                with open(self.log_path) as f:
-                    f.seek(log_start)
-                    died = NODE_DIED.findall(f.read())
-                if died and not self.rviz_window:
-                    raise RvizCrashed('RViz died at start-up (signal %d), see %s'
-                                      % (-int(died[-1]), self.log_path))
-                raise ViewError('roslaunch exited (status %d) before RViz showed up, see %s'
-                                % (self._launch.returncode, self.log_path))
+            self._check_launch_runs('before RViz showed up')
             self.rviz_window = self.rviz_window or self.find_window(RVIZ_WINDOW)
             if self.gui:
                 self.sliders_window = self.sliders_window or self.find_window(SLIDERS_WINDOW)
@@ -198,6 +203,18 @@ class HeadlessView(object):
             # No window manager: every window opens at 0,0, the sliders over RViz.
             self.xdotool('windowmove', self.sliders_window,
                          str(self.settings['sliders_x']), str(self.settings['sliders_y']))
+
+    def _check_launch_runs(self, when):
+        """RvizCrashed if roslaunch has ended because RViz died from a signal, else ViewError if it has ended."""
+        if self._launch.poll() is None:
+            return
+        self._log.flush()
+        with open(self.log_path) as f:
+            f.seek(self._log_start)
+            died = NODE_DIED.findall(f.read())
+        if died:
+            raise RvizCrashed('RViz died at start-up (signal %d), see %s' % (-int(died[-1]), self.log_path))
+        raise ViewError('roslaunch exited (status %d) %s, see %s' % (self._launch.returncode, when, self.log_path))
 
     def _start_xvfb(self):
         # -displayfd: Xvfb picks a free display itself and writes its number
@@ -240,7 +257,7 @@ class HeadlessView(object):
         if done.returncode != 0:
             raise ViewError('import could not take the screenshot: %s' % done.stdout.strip())
 
-    def screenshot(self, path, timeout=None):
+    def _wait_for_robot(self, path, timeout=None):
         """Save a screenshot once the robot shows and its meshes have loaded; the Verdict.
 
         Raises ViewError if the robot does not show within `timeout` (default
@@ -250,9 +267,7 @@ class HeadlessView(object):
         deadline = time.monotonic() + timeout
         previous = None
         while True:
-            if self._launch.poll() is not None:
-                raise ViewError('roslaunch exited (status %d) before the screenshot, see %s'
-                                % (self._launch.returncode, self.log_path))
+            self._check_launch_runs('before the screenshot')
             self.capture(path)
             verdict = check_screenshot(path, self.rviz_config, self.settings)
             if (verdict.shows_robot and previous is not None and previous.shows_robot and
@@ -312,13 +327,7 @@ def main(argv=None):
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     try:
         with HeadlessView(args.launch_args, args.log) as view:
-            start = time.monotonic()
-            view.open()
-            print('[headless_view] RViz up under Xvfb (%s) after %.0f s; waiting for the robot to show'
-                  % (view.display, time.monotonic() - start), file=sys.stderr)
-            start = time.monotonic()
-            view.screenshot(output, args.robot_timeout)
-            print('[headless_view] the robot showed after %.0f s' % (time.monotonic() - start), file=sys.stderr)
+            view.show(output, args.robot_timeout)
     except ViewError as e:
         print('headless_view: error: %s' % e, file=sys.stderr)
         return 1
