@@ -19,6 +19,8 @@ import math
 import numpy as np
 import yaml
 
+from ..model.inertials import combine_masses
+
 STANDARD_GRAVITY = 9.80665  # m/s^2 (CGPM 1901 conventional value)
 
 
@@ -56,21 +58,6 @@ class SensorSpec(object):
     noise_torque: float = 0.0
     rate: float = 100.0
     identity: dict = dataclasses.field(default_factory=dict)
-
-
-def combine_masses(parts):
-    """Total mass and common centre of mass of [(mass, com), ...]."""
-    total = 0.0
-    moment = np.zeros(3)
-    for mass, com in parts:
-        mass = float(mass)
-        if not np.isfinite(mass) or mass < 0:
-            raise ValueError('a mass must be a finite number >= 0, got %r' % mass)
-        total += mass
-        moment += mass * _vec3(com, 'centre of mass')
-    if total == 0.0:
-        return 0.0, np.zeros(3)
-    return total, moment / total
 
 
 def load_sensor_spec(path):

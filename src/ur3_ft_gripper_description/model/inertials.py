@@ -232,16 +232,33 @@ def mass_below(model, frame, positions=None):
     """
     if frame not in model.links:
         raise ValueError('the model has no link %s' % frame)
-    total, moment = 0.0, np.zeros(3)
+    parts = []
     for link in model.links:
         inertial = model.robot.link_map[link].inertial
         if link == frame or inertial is None or frame not in _ancestors(model, link):
             continue
         pose = model.transform(frame, link, positions)
         centre = pose[:3, :3].dot(inertial.origin.xyz if inertial.origin else (0.0, 0.0, 0.0)) + pose[:3, 3]
-        total += inertial.mass
-        moment += inertial.mass * centre
-    return total, (moment / total if total > 0 else np.zeros(3))
+        parts.append((inertial.mass, centre))
+    return combine_masses(parts)
+
+
+def combine_masses(parts):
+    """Total mass and common centre of mass of [(mass, com), ...]; (0, origin) for no mass."""
+    total = 0.0
+    moment = np.zeros(3)
+    for mass, com in parts:
+        mass = float(mass)
+        if not np.isfinite(mass) or mass < 0:
+            raise ValueError('a mass must be a finite number >= 0, got %r' % mass)
+        com = np.asarray(com, dtype=float).reshape(-1)
+        if com.shape != (3,) or not np.all(np.isfinite(com)):
+            raise ValueError('a centre of mass must be 3 finite numbers, got %r' % (com,))
+        total += mass
+        moment += mass * com
+    if total == 0.0:
+        return 0.0, np.zeros(3)
+    return total, moment / total
 
 
 def _ancestors(model, link):
