@@ -22,6 +22,7 @@ import re
 import subprocess
 
 from ur3_ft_gripper_description.model import inertials
+from ur3_ft_gripper_description.model.dom import child_elements
 
 # Names both upstream 2F-140 macros give (before the prefix).
 GRIPPER_BASE = 'robotiq_arg2f_base_link'
@@ -116,10 +117,6 @@ def run_xacro(xacro_file, mappings=None):
         raise DescriptionError(xacro_failure(xacro_file, e)) from None
 
 
-def _elements(robot, tag):
-    return [n for n in robot.childNodes if n.nodeType == n.ELEMENT_NODE and n.tagName == tag]
-
-
 def _link_of(joint, tag):
     nodes = joint.getElementsByTagName(tag)
     return nodes[0].getAttribute('link') if nodes else ''
@@ -134,7 +131,7 @@ def remove_forked_gripper_roots(doc):
     Returns the names of the removed joints.
     """
     robot = doc.documentElement
-    joints = _elements(robot, 'joint')
+    joints = child_elements(robot, 'joint')
     parents_of = {}
     for joint in joints:
         parents_of.setdefault(_link_of(joint, 'child'), []).append(joint)
@@ -150,9 +147,9 @@ def remove_forked_gripper_roots(doc):
             continue
         robot.removeChild(joint)
         removed.append(joint.getAttribute('name'))
-        same_name = [lk for lk in _elements(robot, 'link') if lk.getAttribute('name') == parent]
+        same_name = [lk for lk in child_elements(robot, 'link') if lk.getAttribute('name') == parent]
         still_used = any(parent in (_link_of(j, 'parent'), _link_of(j, 'child'))
-                         for j in _elements(robot, 'joint'))
+                         for j in child_elements(robot, 'joint'))
         empty = [lk for lk in same_name if not any(
             c.nodeType == c.ELEMENT_NODE for c in lk.childNodes)]
         if empty and (len(same_name) > 1 or not still_used):
@@ -180,7 +177,7 @@ def check_tree(doc):
         raise DescriptionError('the expanded model is not one URDF tree: %s (check_urdf); %s' % (
             reason, fix))
     # urdfdom accepts link names that tf2 cannot take as frame ids.
-    for link in _elements(doc.documentElement, 'link'):
+    for link in child_elements(doc.documentElement, 'link'):
         name = link.getAttribute('name')
         if not FRAME_NAME.match(name):
             raise DescriptionError(

@@ -31,6 +31,8 @@ import os
 import numpy as np
 import yaml
 
+from ur3_ft_gripper_description.model.dom import child_elements
+
 # Parts whose upstream inertials are replaced, by the link names the upstream
 # macros give (before the prefix); the first link of each part anchors the prefix.
 FT300_PLATE = 'ft300_mounting_plate'
@@ -199,10 +201,6 @@ def load_table(path=None):
         return yaml.safe_load(f)['links']
 
 
-def _children(element, tag):
-    return [n for n in element.childNodes if n.nodeType == n.ELEMENT_NODE and n.tagName == tag]
-
-
 def _inertial_element(doc, mass, com, inertia):
     inertial = doc.createElement('inertial')
     origin = doc.createElement('origin')
@@ -219,7 +217,7 @@ def _inertial_element(doc, mass, com, inertia):
 
 
 def _set_inertial(doc, link, entry):
-    for old in _children(link, 'inertial'):
+    for old in child_elements(link, 'inertial'):
         link.removeChild(old)
     link.insertBefore(_inertial_element(doc, entry['mass'], entry['com'], entry['inertia']), link.firstChild)
 
@@ -290,8 +288,8 @@ def apply(doc, table=None):
     links changed.
     """
     robot = doc.documentElement
-    links = {link.getAttribute('name'): link for link in _children(robot, 'link')}
-    children = {c.getAttribute('link') for j in _children(robot, 'joint') for c in _children(j, 'child')}
+    links = {link.getAttribute('name'): link for link in child_elements(robot, 'link')}
+    children = {c.getAttribute('link') for j in child_elements(robot, 'joint') for c in child_elements(j, 'child')}
     changed = []
     if any(name.endswith(part[0]) for name in links for part in PARTS.values()):
         table = table if table is not None else load_table()
@@ -306,7 +304,7 @@ def apply(doc, table=None):
                         _set_inertial(doc, links[prefix + n], table[n])
                         changed.append(prefix + n)
     for name, link in links.items():
-        if name in children and not any(_children(link, tag) for tag in ('inertial', 'visual', 'collision')):
+        if name in children and not any(child_elements(link, tag) for tag in ('inertial', 'visual', 'collision')):
             _set_inertial(doc, link, FRAME)
             changed.append(name)
     return changed
