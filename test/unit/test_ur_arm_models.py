@@ -437,6 +437,21 @@ def test_a_urscript_pose_is_a_position_and_a_rotation_vector():
     assert np.allclose(pose_from_ur_pose([0.0] * 6), np.eye(4))
 
 
+def test_rotation_vector_is_the_inverse_of_rotation_matrix_up_to_half_a_turn():
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import rotation_matrix, rotation_vector
+    rng = np.random.default_rng(7)
+    axes = rng.normal(size=(50, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    angles = np.concatenate([[0.0, 1e-9, 1e-4, math.pi - 1e-6], rng.uniform(0.0, math.pi, 46)])
+    for axis, angle in zip(axes, angles):
+        rotation = rotation_matrix(axis * angle)
+        assert np.allclose(rotation.dot(rotation.T), np.eye(3), atol=1e-12)
+        assert np.allclose(rotation.dot(axis), axis, atol=1e-12), 'the axis is not kept'
+        assert np.allclose(rotation_vector(rotation), axis * angle, atol=1e-6), (axis, angle)
+    half = rotation_matrix([0.0, 0.0, math.pi])  # half a turn: either sign of the axis is right
+    assert np.allclose(np.abs(rotation_vector(half)), [0.0, 0.0, math.pi], atol=1e-9)
+
+
 # -- URScript ---------------------------------------------------------------------------
 
 def test_script_parsing():

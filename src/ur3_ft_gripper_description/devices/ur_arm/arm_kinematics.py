@@ -47,14 +47,12 @@ class ArmKinematics(object):
         """The tip's pose, and each actuated joint's axis and origin in the base (controller order)."""
         t = self.base_inverse
         axes, points = [None] * len(self.joints), [None] * len(self.joints)
-        for origin, axis, index in zip(self.origins, self.axes, self.index):
+        for joint, origin, axis, index in zip(self.chain, self.origins, self.axes, self.index):
             t = t.dot(origin)
             if index is not None:
                 axes[index] = t[:3, :3].dot(axis)
                 points[index] = t[:3, 3].copy()
-                motion = np.eye(4)
-                motion[:3, :3] = axangle2mat(axis, positions[index])
-                t = t.dot(motion)
+                t = t.dot(kinematics.motion_matrix(joint, positions[index]))
         return t, axes, points
 
     def jacobian(self, positions):
@@ -74,6 +72,13 @@ class ArmKinematics(object):
             step = jac.T.dot(np.linalg.solve(jac.dot(jac.T) + damping ** 2 * np.eye(6), error))
             q = np.clip(q + step, self.lower, self.upper)
         return q if np.linalg.norm(pose_error(target, self.forward(q))) < tolerance else None
+
+
+def rotation_matrix(vector):
+    """Rotation matrix of a rotation vector (the exp map; URScript's rx, ry, rz)."""
+    vector = np.asarray(vector, dtype=float)
+    angle = float(np.linalg.norm(vector))
+    return axangle2mat(vector / angle, angle) if angle > 0.0 else np.eye(3)
 
 
 def rotation_vector(rotation):

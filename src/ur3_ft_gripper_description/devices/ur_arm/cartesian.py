@@ -16,10 +16,9 @@ import collections
 import math
 
 import numpy as np
-from transforms3d.axangles import axangle2mat, mat2axangle
 from transforms3d.quaternions import quat2mat
 
-from .arm_kinematics import pose_error
+from .arm_kinematics import pose_error, rotation_matrix, rotation_vector
 from .trajectory import GoalError, Point
 
 # Time between two solved poses of a Cartesian path, s.
@@ -39,18 +38,15 @@ def interpolate_pose(start, end, fraction):
     """Straight line and slerp between two 4x4 poses."""
     pose = np.eye(4)
     pose[:3, 3] = start[:3, 3] + fraction * (end[:3, 3] - start[:3, 3])
-    axis, angle = mat2axangle(end[:3, :3].dot(start[:3, :3].T), unit_thresh=1e-5)
-    pose[:3, :3] = axangle2mat(axis, angle * fraction).dot(start[:3, :3])
+    turn = rotation_vector(end[:3, :3].dot(start[:3, :3].T))
+    pose[:3, :3] = rotation_matrix(fraction * turn).dot(start[:3, :3])
     return pose
 
 
 def pose_from_ur_pose(ur_pose):
     """4x4 pose of a URScript pose p[x, y, z, rx, ry, rz] (a position and a rotation vector)."""
     pose = np.eye(4)
-    vector = np.asarray(ur_pose[3:], dtype=float)
-    angle = float(np.linalg.norm(vector))
-    if angle > 0:
-        pose[:3, :3] = axangle2mat(vector / angle, angle)
+    pose[:3, :3] = rotation_matrix(ur_pose[3:])
     pose[:3, 3] = ur_pose[:3]
     return pose
 
@@ -119,10 +115,7 @@ class TwistFollower(object):
             self.pose = actual
         pose = self.pose.copy()
         pose[:3, 3] += twist[:3] * dt
-        angular = np.asarray(twist[3:], dtype=float)
-        angle = float(np.linalg.norm(angular)) * dt
-        if angle > 0.0:
-            pose[:3, :3] = axangle2mat(angular / np.linalg.norm(angular), angle).dot(pose[:3, :3])
+        pose[:3, :3] = rotation_matrix(np.asarray(twist[3:], dtype=float) * dt).dot(pose[:3, :3])
         # A pose the joints cannot follow (limits, singularity) is not chased later: start from where they are.
         if np.linalg.norm(pose_error(pose, actual)) > TWIST_CATCH_UP:
             self.pose = actual
