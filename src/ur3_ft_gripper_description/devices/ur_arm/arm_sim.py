@@ -686,8 +686,7 @@ class ArmSim(object):
 
     def _publish(self, q, qd, scaling, running, modes, io, state_samples, reading):
         now = self.rospy.Time.now()
-        joint_state = JointState(name=self.joints, position=q.tolist(), velocity=qd.tolist(),
-                                        effort=[0.0] * 6)
+        joint_state = JointState(name=self.joints, position=q.tolist(), velocity=qd.tolist(), effort=[0.0] * 6)
         joint_state.header.stamp = now
         if 'joint_state_controller' in reading:
             self.joint_states.publish(joint_state)
