@@ -21,8 +21,13 @@ def controllers_yaml(ur_type):
     return os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', '%s_controllers.yaml' % ur_type)
 
 
+def controller_config(ur_type):
+    """ur_robot_driver's controller sections for `ur_type` and its joints, as the simulated arm reads them."""
+    return cm.controller_sections(cm.read_config(controllers_yaml(ur_type)))
+
+
 def jtc(name='scaled_pos_joint_traj_controller', ur_type='ur5e', vmax=VMAX):
-    sections, joints = cm.load_config(controllers_yaml(ur_type))
+    sections, joints = controller_config(ur_type)
     section = sections[name]
     return TrajectoryController(joints, section['constraints'], section['stop_trajectory_duration'],
                                 'Scaled' in section['type'], LOWER, UPPER, vmax)
@@ -229,7 +234,7 @@ STARTED = ['joint_state_controller', 'scaled_pos_joint_traj_controller', 'speed_
 
 
 def manager(ur_type='ur5e'):
-    sections, joints = cm.load_config(controllers_yaml(ur_type))
+    sections, joints = controller_config(ur_type)
     return cm.ControllerManager(sections, joints, STARTED, [n for n in sections if n not in STARTED and
                                                             sections[n]['type'] in cm.SIMULATED_TYPES])
 
@@ -270,13 +275,13 @@ def test_strict_fails_on_unknown_best_effort_skips():
 
 
 def test_unknown_started_controller_is_one_line():
-    sections, joints = cm.load_config(controllers_yaml('ur5e'))
+    sections, joints = controller_config('ur5e')
     with pytest.raises(cm.ControllerConfigError, match='not_there'):
         cm.ControllerManager(sections, joints, ['not_there'], [])
 
 
 def test_controller_the_simulation_cannot_run_is_one_line():
-    sections, joints = cm.load_config(controllers_yaml('ur5e'))
+    sections, joints = controller_config('ur5e')
     with pytest.raises(cm.ControllerConfigError, match='robot_status_controller.*not simulated'):
         cm.ControllerManager(sections, joints, STARTED + ['robot_status_controller'], [])
 

@@ -67,11 +67,6 @@ def controller_sections(data):
     return sections, joints
 
 
-def load_config(path):
-    """The controller sections of a <ur_type>_controllers.yaml: {name: section}, and the joints."""
-    return controller_sections(read_config(path))
-
-
 class Controller(object):
     def __init__(self, name, section, joints):
         self.name = name
