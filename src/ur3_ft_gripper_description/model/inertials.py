@@ -31,7 +31,7 @@ import os
 import numpy as np
 import yaml
 
-from ur3_ft_gripper_description.model.dom import child_elements
+from ur3_ft_gripper_description.model.names import child_elements, package_path
 
 # Parts whose upstream inertials are replaced, by the link names the upstream
 # macros give (before the prefix); the first link of each part anchors the prefix.
@@ -192,8 +192,7 @@ def write_yaml(path, links, densities):
 # -- the model's inertials (expand time; no trimesh) ----------------------------
 
 def default_table_path():
-    from ur3_ft_gripper_description.model import description
-    return os.path.join(description.package_path('ur3_ft_gripper_description'), 'config', 'link_inertials.yaml')
+    return os.path.join(package_path('ur3_ft_gripper_description'), 'config', 'link_inertials.yaml')
 
 
 def load_table(path=None):
