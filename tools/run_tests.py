@@ -107,9 +107,8 @@ def run_jobs(jobs, results, args, stream):
 
             def line():
                 failed = len(so_far.failed) + len(so_far.skipped) + len(counted.failed) + len(counted.skipped)
-                return '[tests] %s %d/%d %s: %d failed so far, %s' % (
-                    args.label, index, len(jobs), ' '.join(filter(None, (kind, name))), failed,
-                    clock(time.time() - started))
+                what = ' '.join(filter(None, ('%d/%d' % (index, len(jobs)), kind, name)))
+                return '[tests] %s %s: %d failed so far, %s' % (args.label, what, failed, clock(time.time() - started))
 
             progress.status(line())
             log.write('\n=== %s\n' % ' '.join(argv))

@@ -123,6 +123,7 @@ def test_a_command_job_reports_like_a_target(tmp_path):
                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          universal_newlines=True, timeout=60)
     assert run.returncode == 0, run.stderr
+    assert re.sub(r', \d+:\d\d$', '', run.stderr.splitlines()[0]) == '[tests] test/tools 1/1: 0 failed so far'
     assert 'FAILED  test/tools/tools.xml: test_broken' in run.stderr.splitlines(), run.stderr
 
 
