@@ -3,7 +3,7 @@
 A key resolves when it is a rosdep key with a focal (or a generic ubuntu)
 entry in rosdistro's base.yaml or python.yaml, a package that Noetic releases
 (noetic/distribution.yaml), or a package of a repository pinned in
-repos/robotiq-*.repos, which users build in their catkin workspace (README).
+repos/robotiq-*.repos, which users build in their catkin workspace (doc/install.md).
 The rosdistro files come from $UR3_FT_GRIPPER_ROSDISTRO (tools/quickstart sets it);
 nothing is downloaded.
 """
