@@ -150,9 +150,9 @@ def robotiq_variant():
     return 'noetic' if os.path.exists(os.path.join(urdf, 'robotiq_arg2f_140_macro.xacro')) else 'kinetic'
 
 
-def run_export(*args, env=None, command=EXPORT):
+def run_export(*args, env=None, command=EXPORT, cwd=None):
     return subprocess.run(command + list(args), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                          universal_newlines=True, env=env, timeout=120)
+                          universal_newlines=True, env=env, cwd=cwd, timeout=120)
 
 
 def run_expand(*args, env=None):

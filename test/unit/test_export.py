@@ -3,9 +3,10 @@ import os
 
 import numpy as np
 import pytest
+import yaml
 import yourdfpy
 
-from conftest import ExpandedModel, run_export
+from conftest import UR_CONFIG_ROOT, ExpandedModel, run_export
 from ur3_ft_gripper_description.model import export
 
 CASES = {  # name -> export_urdf options
@@ -102,3 +103,16 @@ def test_bad_options_are_one_line_and_write_nothing(tmp_path, options, words):
     for word in words:
         assert word in lines[0], (word, lines[0])
     assert not out.exists()
+
+
+def test_a_relative_parameter_file_is_taken_from_where_the_command_runs(tmp_path):
+    # A calibration beside the user's shell, named as the shell names it: the shoulder height
+    # it changes must show in the export (xacro alone would look for it beside the package's xacro).
+    with open(os.path.join(UR_CONFIG_ROOT, 'ur3', 'default_kinematics.yaml')) as f:
+        calibration = yaml.safe_load(f)
+    calibration['kinematics']['shoulder']['z'] = 0.1525
+    with open(str(tmp_path / 'my_robot_calibration.yaml'), 'w') as f:
+        yaml.safe_dump(calibration, f)
+    run = run_export('--no-gripper', '--kinematics-params', 'my_robot_calibration.yaml', cwd=str(tmp_path))
+    assert run.returncode == 0, run.stderr
+    assert ExpandedModel(run.stdout).origin_xyz('shoulder_pan_joint')[2] == pytest.approx(0.1525)

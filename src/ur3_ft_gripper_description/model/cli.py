@@ -1,6 +1,7 @@
 """Command-line entry points; each prints one error line and exits non-zero on bad input."""
 
 import argparse
+import os
 import sys
 
 from . import description
@@ -78,6 +79,10 @@ def _installed_ur_types():
         return ''
 
 
+def _absolute_path(path):
+    return os.path.abspath(path) if path else path
+
+
 def _model_parser(prog, description_text):
     """The options every export command takes: which model, with which parameter files."""
     parser = OneLineParser(prog=prog, description=description_text)
@@ -92,7 +97,9 @@ def _model_parser(prog, description_text):
     for arg, what in (('joint-limit-params', 'joint limits'),
                       ('kinematics-params', 'kinematic calibration (use your robot\'s own)'),
                       ('physical-params', 'physical parameters'), ('visual-params', 'meshes')):
-        parser.add_argument('--' + arg, default='', metavar='YAML',
+        # A path on the command line is the shell's, relative to where the command runs; xacro
+        # would take it relative to the top-level xacro file.
+        parser.add_argument('--' + arg, default='', metavar='YAML', type=_absolute_path,
                             help="YAML file with the arm's %s (default: ur_description's file for "
                                  "--ur-type)" % what)
     return parser
