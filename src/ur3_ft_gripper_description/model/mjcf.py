@@ -215,9 +215,11 @@ class MjcfWriter(object):
 
     def option(self, root):
         solver = self.figures['solver']
-        self.element(root, 'option', timestep=repr(float(solver['timestep'])), integrator=solver['integrator'],
-                     cone=solver['cone'], impratio=repr(float(solver['impratio'])),
-                     noslip_iterations=str(int(solver['noslip_iterations'])))
+        option = self.element(root, 'option', timestep=repr(float(solver['timestep'])),
+                              integrator=solver['integrator'], cone=solver['cone'],
+                              impratio=repr(float(solver['impratio'])),
+                              noslip_iterations=str(int(solver['noslip_iterations'])))
+        self.element(option, 'flag', **{name: 'enable' for name in solver.get('enable_flags', ())})
 
     def actuators(self, root):
         """Each arm joint's servo and the finger's: a position gain, and a velocity gain beside it."""

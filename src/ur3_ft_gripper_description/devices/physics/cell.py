@@ -94,12 +94,13 @@ class Cell(object):
         joint_ids = [m.joint(n).id for n in self.arm_joints]
         self._arm_qpos = np.array([m.jnt_qposadr[j] for j in joint_ids])
         self._arm_dofs = np.array([m.jnt_dofadr[j] for j in joint_ids])
+        self._arm_kp = np.array([m.actuator_gainprm[i][0] for i in self._arm_position_ctrl])
         self.arm_lower = np.array([m.jnt_range[j][0] for j in joint_ids])
         self.arm_upper = np.array([m.jnt_range[j][1] for j in joint_ids])
         self.urdf_text = urdf_text
         urdf = kinematics.Model(urdf_text)
         self.arm_velocity_limits = np.array([urdf.joints[n].limit.velocity for n in self.arm_joints])
-        self._robot_bodies = np.array([m.body(n).id for n in robot_bodies])
+        self.robot_bodies = np.array([m.body(n).id for n in robot_bodies])
         self.protective_stop_force = float(self.figures['arm']['protective_stop_force'])
         self.protective_stop = None
 
@@ -116,6 +117,7 @@ class Cell(object):
         self.gripper = None
         if self.finger_joint in names:
             self.gripper = GripperKinematics(urdf_text, prefix)
+            self.gripper_base = self.gripper.model.joints[self.finger_joint].parent
             self._rates = np.abs(np.gradient(self.gripper.openings, self.gripper.angles))
             joint = m.joint(self.finger_joint).id
             self._finger_joint = joint
@@ -196,9 +198,19 @@ class Cell(object):
         steps = int(math.floor(self._debt / self.timestep + 1e-9))
         self._debt -= steps * self.timestep
         start = self._reference.copy()
+        # The servo's inertia feedforward: the torque that accelerating the arm along the reference
+        # takes (mass matrix, armature included, times the reference's acceleration), given as an
+        # offset of the position servo's reference.
+        acceleration = np.zeros(self.model.nv)
+        if steps:
+            acceleration[self._arm_dofs] = (self._reference_velocity - self._previous_velocity) / (
+                steps * self.timestep)
+        torque = np.zeros(self.model.nv)
         for k in range(steps):
-            share = (k + 1.0) / steps
-            self._set_arm_ctrl(start + (self._next_reference - start) * share, self._reference_velocity)
+            share = float(k) / steps
+            self.mujoco.mj_mulM(self.model, self.data, torque, acceleration)
+            self._set_arm_ctrl(start + (self._next_reference - start) * share + torque[self._arm_dofs] / self._arm_kp,
+                               self._reference_velocity)
             if self.gripper is not None:
                 self._drive_finger(self.timestep)
             self.mujoco.mj_step(self.model, self.data)
@@ -208,6 +220,7 @@ class Cell(object):
                 self._watch_finger()
         if steps:
             self._reference = self._next_reference.copy()
+            self._previous_velocity = self._reference_velocity.copy()
         return steps
 
     # -- the arm ------------------------------------------------------------------
@@ -244,11 +257,12 @@ class Cell(object):
         self._reference = self.arm_position
         self._next_reference = self._reference.copy()
         self._reference_velocity = np.zeros(len(self._reference))
+        self._previous_velocity = self._reference_velocity.copy()
         self._set_arm_ctrl(self._reference, self._reference_velocity)
 
     def contact_force(self):
         """Net force (N, world frame) that the world's contacts put on the robot."""
-        return self.data.cfrc_ext[self._robot_bodies, 3:].sum(axis=0)
+        return self.data.cfrc_ext[self.robot_bodies, 3:].sum(axis=0)
 
     def _check_contact_force(self):
         force = float(np.linalg.norm(self.contact_force()))

@@ -238,11 +238,12 @@ def load_world(path):
     if not isinstance(objects, list):
         raise WorldError('%s: objects must be a list of objects' % path)
     solids = [_solid(path, 'objects[%d]' % i, entry, folder, movable=True) for i, entry in enumerate(objects)]
-    names = [TABLE_NAME] + [solid.name for solid in solids]
-    for i, solid in enumerate(solids):
-        if names.count(solid.name) > 1:
+    taken = {TABLE_NAME}
+    for solid in solids:
+        if solid.name in taken:
             raise WorldError("%s: %s: the name '%s' is taken: give each object its own" % (
                 path, solid.label, solid.name))
+        taken.add(solid.name)
     return World(path, table, solids)
 
 
