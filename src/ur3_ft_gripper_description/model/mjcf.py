@@ -225,11 +225,14 @@ class MjcfWriter(object):
         """Each arm joint's servo and the finger's: a position gain, and a velocity gain beside it."""
         actuator = self.element(root, 'actuator')
         arm = self.figures['arm']
+        gains = []
         for name in self.arm_joints:
-            limit = self.model.joints[name].limit
-            kp = limit.effort / float(arm['servo_error_at_effort_limit'])
+            kp = self.model.joints[name].limit.effort / float(arm['servo_error_at_effort_limit'])
+            gains.append((name, kp, 2.0 * float(arm['servo_damping_ratio']) * math.sqrt(kp * float(arm['armature']))))
+        # All position gains, then all velocity gains: each a contiguous block of ctrl for the cell.
+        for name, kp, _ in gains:
             self.element(actuator, 'position', name=name, joint=name, kp=repr(kp))
-            kv = 2.0 * float(arm['servo_damping_ratio']) * math.sqrt(kp * float(arm['armature']))
+        for name, _, kv in gains:
             self.element(actuator, 'velocity', name=name + VELOCITY_SUFFIX, joint=name, kv=repr(kv))
         if self.finger in self.model.joints:
             limit = self.model.joints[self.finger].limit

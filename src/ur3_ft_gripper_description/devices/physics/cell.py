@@ -47,6 +47,14 @@ STALL_TIME = 0.02
 MOVING, AT_TARGET, ON_OBJECT = 'moving', 'at_target', 'on_object'
 
 
+def _index(ids):
+    """A slice for ascending consecutive ids (numpy takes it without a copy), else an index array."""
+    ids = [int(i) for i in ids]
+    if ids and ids == list(range(ids[0], ids[0] + len(ids))):
+        return slice(ids[0], ids[0] + len(ids))
+    return np.array(ids, dtype=int)
+
+
 class FingerState(object):
     """Where the 2F-140's fingers are and what they are doing.
 
@@ -81,6 +89,10 @@ class Cell(object):
             raise WorldError('%s: MuJoCo cannot load the cell: %s' % (
                 self.world.path, ' '.join(str(exc).split()))) from None
         self.data = self.mujoco.MjData(self.model)
+        # The arrays stepped through at every timestep, taken once: each attribute access makes a new view.
+        self._ctrl, self._qpos, self._qvel = self.data.ctrl, self.data.qpos, self.data.qvel
+        self._cfrc_ext = self.data.cfrc_ext
+        self._actfrcrange = self.model.jnt_actfrcrange
         self.timestep = float(self.model.opt.timestep)
         self._debt = 0.0
         m = self.model
@@ -89,18 +101,19 @@ class Cell(object):
         self.finger_joint = prefix + description.FINGER_JOINT
         names = [m.actuator(i).name for i in range(m.nu)]
         self.arm_joints = [n for n in names if n + mjcf.VELOCITY_SUFFIX in names and n != self.finger_joint]
-        self._arm_position_ctrl = np.array([m.actuator(n).id for n in self.arm_joints])
-        self._arm_velocity_ctrl = np.array([m.actuator(n + mjcf.VELOCITY_SUFFIX).id for n in self.arm_joints])
+        self._arm_position_ctrl = _index([m.actuator(n).id for n in self.arm_joints])
+        self._arm_velocity_ctrl = _index([m.actuator(n + mjcf.VELOCITY_SUFFIX).id for n in self.arm_joints])
         joint_ids = [m.joint(n).id for n in self.arm_joints]
-        self._arm_qpos = np.array([m.jnt_qposadr[j] for j in joint_ids])
-        self._arm_dofs = np.array([m.jnt_dofadr[j] for j in joint_ids])
-        self._arm_kp = np.array([m.actuator_gainprm[i][0] for i in self._arm_position_ctrl])
+        self._arm_qpos = _index([m.jnt_qposadr[j] for j in joint_ids])
+        self._arm_dofs = _index([m.jnt_dofadr[j] for j in joint_ids])
+        self._arm_kp = np.array([m.actuator(n).gainprm[0] for n in self.arm_joints])
         self.arm_lower = np.array([m.jnt_range[j][0] for j in joint_ids])
         self.arm_upper = np.array([m.jnt_range[j][1] for j in joint_ids])
         self.urdf_text = urdf_text
         urdf = kinematics.Model(urdf_text)
         self.arm_velocity_limits = np.array([urdf.joints[n].limit.velocity for n in self.arm_joints])
         self.robot_bodies = np.array([m.body(n).id for n in robot_bodies])
+        self._robot_bodies = _index(self.robot_bodies)
         self.protective_stop_force = float(self.figures['arm']['protective_stop_force'])
         self.protective_stop = None
 
@@ -129,8 +142,8 @@ class Cell(object):
             gripper = self.figures['gripper']
             self.grip_force_range = (float(gripper['grip_force_min']), float(gripper['grip_force_max']))
             self.finger_tolerance = float(gripper['target_tolerance'])
-            self._finger = dict(target=None, ramp=None, speed=0.0, force=self.grip_force_range[0],
-                                closing=False, stalled=0.0)
+            self._finger = dict(target=None, ramp=None, angle=None, speed=0.0,
+                                force=self.grip_force_range[0], closing=False, stalled=0.0)
 
         # -- the world's objects
         self._objects = {solid.name: m.body(solid.name).id for solid in self.world.objects}
@@ -197,23 +210,30 @@ class Cell(object):
         self._debt += max(float(dt), 0.0)
         steps = int(math.floor(self._debt / self.timestep + 1e-9))
         self._debt -= steps * self.timestep
-        start = self._reference.copy()
+        start = self._reference
+        change = self._next_reference - start
+        moving = steps and change.any()
         # The servo's inertia feedforward: the torque that accelerating the arm along the reference
         # takes (mass matrix, armature included, times the reference's acceleration), given as an
         # offset of the position servo's reference.
-        acceleration = np.zeros(self.model.nv)
-        if steps:
+        acceleration = None
+        if steps and (self._reference_velocity != self._previous_velocity).any():
+            acceleration = np.zeros(self.model.nv)
             acceleration[self._arm_dofs] = (self._reference_velocity - self._previous_velocity) / (
                 steps * self.timestep)
-        torque = np.zeros(self.model.nv)
+            torque = np.zeros(self.model.nv)
+        mujoco, model, data = self.mujoco, self.model, self.data
+        ctrl, positions = self._ctrl, self._arm_position_ctrl
+        ctrl[self._arm_velocity_ctrl] = self._reference_velocity
         for k in range(steps):
-            share = float(k) / steps
-            self.mujoco.mj_mulM(self.model, self.data, torque, acceleration)
-            self._set_arm_ctrl(start + (self._next_reference - start) * share + torque[self._arm_dofs] / self._arm_kp,
-                               self._reference_velocity)
+            position = start + change * (float(k) / steps) if moving else start
+            if acceleration is not None:
+                mujoco.mj_mulM(model, data, torque, acceleration)
+                position = position + torque[self._arm_dofs] / self._arm_kp
+            ctrl[positions] = position
             if self.gripper is not None:
                 self._drive_finger(self.timestep)
-            self.mujoco.mj_step(self.model, self.data)
+            mujoco.mj_step(model, data)
             if self.protective_stop is None:
                 self._check_contact_force()
             if self.gripper is not None:
@@ -249,8 +269,8 @@ class Cell(object):
         self._reference_velocity = np.array(velocity, dtype=float)
 
     def _set_arm_ctrl(self, position, velocity):
-        self.data.ctrl[self._arm_position_ctrl] = position
-        self.data.ctrl[self._arm_velocity_ctrl] = velocity
+        self._ctrl[self._arm_position_ctrl] = position
+        self._ctrl[self._arm_velocity_ctrl] = velocity
 
     def _hold_reference(self):
         """Hold the arm where it is now."""
@@ -262,10 +282,11 @@ class Cell(object):
 
     def contact_force(self):
         """Net force (N, world frame) that the world's contacts put on the robot."""
-        return self.data.cfrc_ext[self.robot_bodies, 3:].sum(axis=0)
+        return self._cfrc_ext[self._robot_bodies, 3:].sum(axis=0)
 
     def _check_contact_force(self):
-        force = float(np.linalg.norm(self.contact_force()))
+        force = self.contact_force()
+        force = math.sqrt(force.dot(force))
         if force > self.protective_stop_force:
             self.protective_stop = ('the contact force on the robot, %.0f N, exceeded the %.0f N limit'
                                     % (force, self.protective_stop_force))
@@ -295,7 +316,7 @@ class Cell(object):
         state = self._finger
         current = self.gripper.opening(self.data.qpos[self._finger_qpos])
         state['target'] = min(max(float(opening), low), high)
-        state['ramp'] = current
+        state['ramp'], state['angle'] = current, None
         state['speed'] = max(float(speed), 0.0)
         state['force'] = min(max(float(force), self.grip_force_range[0]), self.grip_force_range[1])
         state['closing'] = state['target'] < current
@@ -305,22 +326,25 @@ class Cell(object):
         return float(np.interp(angle, self.gripper.angles, self._rates))
 
     def _drive_finger(self, dt):
-        m, d, state = self.model, self.data, self._finger
+        ctrl, state = self._ctrl, self._finger
         ramp = state['ramp']
-        step = state['speed'] * dt
-        delta = state['target'] - ramp
-        ramp = state['target'] if abs(delta) <= step else ramp + math.copysign(step, delta)
-        before = d.ctrl[self._finger_ctrl]
-        angle = self.gripper.angle(ramp)
-        state['ramp'] = ramp
-        d.ctrl[self._finger_ctrl] = angle
-        d.ctrl[self._finger_velocity_ctrl] = (angle - before) / dt if dt > 0 else 0.0
-        limit = state['force'] * self._rate(d.qpos[self._finger_qpos])
-        m.jnt_actfrcrange[self._finger_joint] = (-limit, limit)
+        if ramp != state['target'] or state['angle'] is None:
+            step = state['speed'] * dt
+            delta = state['target'] - ramp
+            ramp = state['target'] if abs(delta) <= step else ramp + math.copysign(step, delta)
+            angle = self.gripper.angle(ramp)
+            ctrl[self._finger_velocity_ctrl] = (angle - ctrl[self._finger_ctrl]) / dt if dt > 0 else 0.0
+            ctrl[self._finger_ctrl] = angle
+            state.update(ramp=ramp, angle=angle)
+        else:
+            ctrl[self._finger_velocity_ctrl] = 0.0
+        limit = state['force'] * self._rate(self._qpos[self._finger_qpos])
+        self._actfrcrange[self._finger_joint, 0] = -limit
+        self._actfrcrange[self._finger_joint, 1] = limit
 
     def _watch_finger(self):
         state = self._finger
-        if abs(self.data.qvel[self._finger_dof]) < STALL_SPEED:
+        if abs(self._qvel[self._finger_dof]) < STALL_SPEED:
             state['stalled'] += self.timestep
         else:
             state['stalled'] = 0.0

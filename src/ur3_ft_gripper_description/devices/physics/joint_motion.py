@@ -54,6 +54,7 @@ class PhysicsJointMotion(object):
                                           else velocity_limits, dtype=float)
         self.lower, self.upper = cell.arm_lower, cell.arm_upper
         self.reference = cell.arm_position
+        self._still = np.zeros(len(self.reference))
 
     @property
     def position(self):
@@ -82,6 +83,10 @@ class PhysicsJointMotion(object):
             self.cell.step(dt)
             return
         mode = command.mode
+        if mode == HOLD:
+            self.cell.set_arm_reference(self.reference, self._still)
+            self.cell.step(dt)
+            return
         if mode == SERVO:
             target, lag = command.position, self.lookahead
         elif mode == MOVE:
@@ -89,7 +94,7 @@ class PhysicsJointMotion(object):
         elif mode == VELOCITY:
             target, lag = self.reference + np.asarray(command.velocity, dtype=float) * dt, 0.0
         else:
-            target, lag = self.reference, 0.0
+            raise ValueError('joint command mode %r: use one of %s' % (mode, ', '.join(MODES)))
         if dt > 0.0:
             self.reference, velocity = joints.follow(self.reference, target, dt, lag, self.velocity_limits,
                                                      self.lower, self.upper)
