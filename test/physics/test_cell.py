@@ -19,6 +19,7 @@ from conftest import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices.physics.joint_motion import JointCommand
 from ur3_ft_gripper_description.devices.ur_arm import joints
+from ur3_ft_gripper_description.model import inertials
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
 
@@ -46,30 +47,18 @@ def test_the_robots_mass_is_the_models_and_the_manuals(make_cell, robot):
 def gravity_torques(urdf_text, arm):
     """Each arm joint's torque holding the links below it against gravity (the URDF's masses, its FK)."""
     model = kinematics.Model(urdf_text)
-    root = model.root()
     positions = dict(zip(ARM_JOINTS, arm))
     torques = []
     for name in ARM_JOINTS:
         joint = model.joints[name]
-        frame = model.transform(root, joint.child, positions)
+        frame = model.transform(model.root(), joint.child, positions)  # at the joint, in its axes
+        own = model.robot.link_map[joint.child].inertial
+        mass, com = inertials.combine_masses([inertials.mass_below(model, joint.child, positions),
+                                              (own.mass, kinematics.pose_matrix(own.origin)[:3, 3])])
+        lever = frame[:3, :3].dot(com)
         axis = frame[:3, :3].dot(joint.axis)
-        below = [link.name for link in model.robot.links if link.inertial and
-                 (link.name == joint.child or joint.child in _ancestors(model, link.name))]
-        moment = np.zeros(3)
-        for link in below:
-            inertial = model.robot.link_map[link].inertial
-            com = model.transform(root, link, positions).dot(kinematics.pose_matrix(inertial.origin))[:3, 3]
-            moment += np.cross(com - frame[:3, 3], [0.0, 0.0, -inertial.mass * STANDARD_GRAVITY])
-        torques.append(-float(moment.dot(axis)))
+        torques.append(-float(np.cross(lever, [0.0, 0.0, -mass * STANDARD_GRAVITY]).dot(axis)))
     return np.array(torques)
-
-
-def _ancestors(model, link):
-    found = []
-    while link in model.parent_joint:
-        link = model.parent_joint[link].parent
-        found.append(link)
-    return found
 
 
 @pytest.mark.parametrize('offset', [[0.0] * 6, [0.5, 0.3, -0.4, 0.6, 0.8, 0.2]], ids=['start', 'other'])
