@@ -4,6 +4,7 @@ from setuptools import setup
 
 setup(**generate_distutils_setup(
     packages=['ur3_ft_gripper_description', 'ur3_ft_gripper_description.model',
-              'ur3_ft_gripper_description.devices', 'ur3_ft_gripper_description.devices.ur_arm'],
+              'ur3_ft_gripper_description.devices', 'ur3_ft_gripper_description.devices.ur_arm',
+              'ur3_ft_gripper_description.devices.physics'],
     package_dir={'': 'src'},
 ))

@@ -58,3 +58,40 @@ def test_bad_input_is_one_line(tmp_path, options, words):
     for word in words:
         assert word in lines[0], (word, lines[0])
     assert not os.path.exists(str(tmp_path / 'm.xml'))
+
+
+def test_physics_drives_every_arm_joint_within_the_urdfs_effort_limits(tmp_path, default_model):
+    out = tmp_path / 'ur3.xml'
+    assert export_mjcf('-o', str(out)).returncode == 0
+    root = ElementTree.parse(str(out)).getroot()
+    assert root.find('compiler').get('fusestatic') == 'false'  # the FT 300's frame stays a body
+    joints = {j.get('name'): j for j in root.iter('joint')}
+    arm = [name for name in default_model.joints if default_model.joints[name].type != 'fixed' and
+           default_model.joints[name].mimic is None and name != 'finger_joint']
+    assert len(arm) == 6
+    for name in arm:
+        effort = default_model.joints[name].limit.effort
+        assert [float(v) for v in joints[name].get('actuatorfrcrange').split()] == [-effort, effort], name
+        assert joints[name].get('actuatorgravcomp') == 'true'
+        assert root.find("actuator/position[@joint='%s']" % name).get('name') == name
+        assert root.find("actuator/velocity[@joint='%s']" % name).get('name') == name + '_velocity'
+    assert all(body.get('gravcomp') == '1' for body in root.iter('body'))
+
+
+def test_the_ft300_frame_carries_the_force_and_torque_sensors(tmp_path):
+    out = tmp_path / 'left.xml'
+    assert export_mjcf('--prefix', 'left_', '-o', str(out)).returncode == 0
+    root = ElementTree.parse(str(out)).getroot()
+    frame = root.find(".//body[@name='left_robotiq_ft_frame_id']")
+    assert frame.find("site[@name='left_robotiq_ft_frame_id']") is not None
+    assert root.find("sensor/force").get('site') == 'left_robotiq_ft_frame_id'
+    assert root.find("sensor/torque").get('site') == 'left_robotiq_ft_frame_id'
+    pads = [g for g in root.iter('geom') if 'inner_finger_pad' in g.get('name')]
+    assert len(pads) == 2 and all(g.get('priority') == '1' and g.get('condim') for g in pads)
+
+
+def test_without_the_ft300_there_is_no_sensor(tmp_path):
+    out = tmp_path / 'noft.xml'
+    assert export_mjcf('--no-ft-sensor', '-o', str(out)).returncode == 0
+    root = ElementTree.parse(str(out)).getroot()
+    assert root.find('sensor') is None and not list(root.iter('site'))

@@ -16,9 +16,32 @@ itself. This writes the expanded model (with its inertials) as MJCF:
 * collision meshes converted (trimesh) to binary STL beside the MJCF, scaled;
   they serve as the visual geometry too (MuJoCo has no DAE decoder);
 * ``finger_joint`` driven by a position actuator, as the 2F-140's motor holds
-  its fingers (ctrl 0 = open, up to its upper limit = closed).
+  its fingers (ctrl 0 = open, up to its upper limit = closed), with a
+  velocity gain beside it (``finger_joint_velocity``); the physics cell caps
+  their torque at the grip force asked for.
+
+What physics needs beyond the URDF (the figures and their sources are in
+``config/physics.yaml``, read by ``load_physics_figures``):
+
+* the solver: a 2 ms step, implicit integration of the servos' damping,
+  elliptic friction cones, no fusing of fixed-joint bodies (the FT 300's
+  frame must stay a body of its own for its sensor);
+* every arm joint driven as the UR controller drives it: a position servo
+  (actuator ``<joint>``, ctrl = the reference position) beside a velocity
+  gain (``<joint>_velocity``, ctrl = the reference velocity), with an
+  armature, gravity compensated through the actuators (``gravcomp`` on every
+  body of the robot, ``actuatorgravcomp`` on the joints, as the controller
+  compensates the arm and its configured payload), and the sum capped at
+  the URDF's effort limit (``actuatorfrcrange``);
+* the FT 300: a site at its sensor frame with a force and a torque sensor
+  (``<frame>_force``, ``<frame>_torque``); MuJoCo reports there what the
+  frame's parent exerts on it, i.e. minus what the tool side exerts on the
+  sensor;
+* the finger pads' friction and contact stiffness, and linkage equalities
+  stiff enough that the closed four-bar does not drift.
 """
 
+import math
 import os
 import re
 from xml.dom import minidom
@@ -29,11 +52,29 @@ from transforms3d.quaternions import mat2quat
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description, export
-from ur3_ft_gripper_description.model.names import FINGER_JOINT
+from ur3_ft_gripper_description.model.names import FINGER_JOINT, PADS
 
 EXCLUDED_REASONS = ('Adjacent', 'Default', 'Always')
-MIMIC_SOLREF = '0.005 1'  # stiffer than MuJoCo's default 0.02 s: the linkage must not drift
-FINGER_ACTUATOR = dict(kp='20', kv='0.5', forcerange='-20 20')
+VELOCITY_SUFFIX = '_velocity'
+FORCE_SUFFIX, TORQUE_SUFFIX = '_force', '_torque'
+
+
+def _config_path(name):
+    return os.path.join(description.package_path('ur3_ft_gripper_description'), 'config', name)
+
+
+def load_physics_figures(path=None):
+    """The sections of config/physics.yaml (solver, arm, gripper) as dicts."""
+    with open(path or _config_path('physics.yaml')) as f:
+        figures = yaml.safe_load(f)
+    return {section: dict(figures[section]) for section in ('solver', 'arm', 'gripper')}
+
+
+def ft_sensor_frame(path=None):
+    """The FT 300's sensor frame (before the prefix): `sensor.frame_id` of config/sim_devices.yaml."""
+    with open(path or _config_path('sim_devices.yaml')) as f:
+        return yaml.safe_load(f)['sensor']['frame_id']
+
 
 
 def _numbers(values):
@@ -65,13 +106,25 @@ def collision_matrix(mappings, path=None):
     return table[ur_type][parts]
 
 
+def _servo_joints(model, finger):
+    """The arm's joints: every moving joint that no other joint mimics after, but the finger's."""
+    return [joint.name for joint in model.robot.joints
+            if joint.type in ('revolute', 'continuous', 'prismatic') and joint.mimic is None
+            and joint.name != finger]
+
+
 class MjcfWriter(object):
-    def __init__(self, model, mesh_folder):
+    def __init__(self, model, mesh_folder, prefix='', figures=None):
         self.model = model
         self.mesh_folder = mesh_folder
         self.doc = minidom.Document()
         self.meshes = {}  # (path, scale) -> asset name
         self.asset = self.doc.createElement('asset')
+        self.figures = figures or load_physics_figures()
+        self.finger = prefix + FINGER_JOINT
+        self.arm_joints = _servo_joints(model, self.finger)
+        self.pads = {prefix + pad for pad in PADS}
+        self.ft_frame = prefix + ft_sensor_frame()
 
     def element(self, parent, tag, **attributes):
         node = self.doc.createElement(tag)
@@ -98,7 +151,8 @@ class MjcfWriter(object):
 
     def body(self, parent, link_name, joint=None):
         link = self.model.robot.link_map[link_name]
-        body = self.element(parent, 'body', name=link_name)
+        # The controller compensates the gravity of the arm and its configured payload (the tool).
+        body = self.element(parent, 'body', name=link_name, gravcomp='1')
         if joint is not None:
             _pose_attributes(body, joint.origin)
             if joint.type in ('revolute', 'continuous', 'prismatic'):
@@ -110,6 +164,7 @@ class MjcfWriter(object):
                 if joint.dynamics is not None:
                     attributes['damping'] = repr(float(joint.dynamics.damping or 0.0))
                     attributes['frictionloss'] = repr(float(joint.dynamics.friction or 0.0))
+                attributes.update(self.drive_attributes(joint))
                 self.element(body, 'joint', **attributes)
         inertial = link.inertial
         if inertial is not None and inertial.mass > 0:
@@ -131,17 +186,81 @@ class MjcfWriter(object):
                 attributes.update(type='cylinder', size=_numbers((geometry.radius, geometry.length / 2.0)))
             elif hasattr(geometry, 'radius'):
                 attributes.update(type='sphere', size=repr(float(geometry.radius)))
+            if link_name in self.pads:
+                attributes.update(self.pad_attributes())
             geom = self.element(body, 'geom', **attributes)
             _pose_attributes(geom, collision.origin)
+        if link_name == self.ft_frame:
+            self.element(body, 'site', name=link_name)
         for child in self.model.robot.joints:
             if child.parent == link_name:
                 self.body(body, child.child, child)
         return body
 
+    def drive_attributes(self, joint):
+        """What a joint's drive adds: an arm joint's armature, gravity compensation and effort limit."""
+        if joint.name == self.finger:
+            return dict(armature=repr(float(self.figures['gripper']['finger_armature'])))
+        if joint.name not in self.arm_joints:
+            return {}
+        attributes = dict(armature=repr(float(self.figures['arm']['armature'])), actuatorgravcomp='true')
+        if joint.limit is not None and joint.limit.effort:
+            attributes['actuatorfrcrange'] = _numbers((-joint.limit.effort, joint.limit.effort))
+        return attributes
+
+    def pad_attributes(self):
+        gripper = self.figures['gripper']
+        return dict(friction=_numbers(gripper['pad_friction']), condim=str(int(gripper['pad_condim'])),
+                    solref=_numbers(gripper['pad_solref']), solimp=_numbers(gripper['pad_solimp']),
+                    priority='1')
+
+    def option(self, root):
+        solver = self.figures['solver']
+        option = self.element(root, 'option', timestep=repr(float(solver['timestep'])),
+                              integrator=solver['integrator'], cone=solver['cone'],
+                              impratio=repr(float(solver['impratio'])),
+                              noslip_iterations=str(int(solver['noslip_iterations'])))
+        self.element(option, 'flag', **{name: 'enable' for name in solver.get('enable_flags', ())})
+
+    def actuators(self, root):
+        """Each arm joint's servo and the finger's: a position gain, and a velocity gain beside it."""
+        actuator = self.element(root, 'actuator')
+        arm = self.figures['arm']
+        gains = []
+        for name in self.arm_joints:
+            kp = self.model.joints[name].limit.effort / float(arm['servo_error_at_effort_limit'])
+            gains.append((name, kp, 2.0 * float(arm['servo_damping_ratio']) * math.sqrt(kp * float(arm['armature']))))
+        # All position gains, then all velocity gains: each a contiguous block of ctrl for the cell.
+        for name, kp, _ in gains:
+            self.element(actuator, 'position', name=name, joint=name, kp=repr(kp))
+        for name, _, kv in gains:
+            self.element(actuator, 'velocity', name=name + VELOCITY_SUFFIX, joint=name, kv=repr(kv))
+        if self.finger in self.model.joints:
+            limit = self.model.joints[self.finger].limit
+            gripper = self.figures['gripper']
+            self.element(actuator, 'position', name=self.finger, joint=self.finger,
+                         ctrlrange=_numbers((limit.lower, limit.upper)), kp=repr(float(gripper['finger_kp'])))
+            self.element(actuator, 'velocity', name=self.finger + VELOCITY_SUFFIX, joint=self.finger,
+                         kv=repr(float(gripper['finger_kv'])))
+
+    def sensors(self, root):
+        """The FT 300's force and torque sensors at its sensor frame."""
+        if self.ft_frame in self.model.robot.link_map:
+            sensor = self.element(root, 'sensor')
+            self.element(sensor, 'force', name=self.ft_frame + FORCE_SUFFIX, site=self.ft_frame)
+            self.element(sensor, 'torque', name=self.ft_frame + TORQUE_SUFFIX, site=self.ft_frame)
+
 
 def export_mjcf(mappings, output, matrix_path=None):
     """Write the MJCF of the package's model for `mappings` to `output`, meshes to <output>_meshes/."""
-    doc = description.expand_model(mappings)
+    return write_mjcf(description.expand_model(mappings), mappings, output, matrix_path)
+
+
+def write_mjcf(doc, mappings, output, matrix_path=None, figures=None):
+    """Write the MJCF of `doc`, the model expanded for `mappings`, to `output`; returns its text.
+
+    `figures`: load_physics_figures()'s dict (default: config/physics.yaml's).
+    """
     model = kinematics.Model(description.to_xml(doc))
     pairs = collision_matrix(mappings, matrix_path)
     stem = os.path.splitext(os.path.abspath(output))[0]
@@ -153,9 +272,12 @@ def export_mjcf(mappings, output, matrix_path=None):
     except OSError as e:
         raise description.DescriptionError('cannot write %s (%s): give -o a file in a folder you can write' % (
             output, e.strerror or e)) from None
-    writer = MjcfWriter(model, mesh_folder)
+    prefix = mappings.get('prefix', '')
+    writer = MjcfWriter(model, mesh_folder, prefix, figures)
     root = writer.element(writer.doc, 'mujoco', model=model.robot.name)
-    writer.element(root, 'compiler', angle='radian', autolimits='true')
+    # fusestatic off: the FT 300's sensor frame must stay a body of its own (MJCF's default, said).
+    writer.element(root, 'compiler', angle='radian', autolimits='true', fusestatic='false')
+    writer.option(root)
     root.appendChild(writer.asset)
     world = writer.element(root, 'worldbody')
     if model.root() == 'world':  # MuJoCo's own name for its world body: the model hangs from that
@@ -165,27 +287,24 @@ def export_mjcf(mappings, output, matrix_path=None):
     else:
         writer.body(world, model.root())
 
-    prefix = mappings.get('prefix', '')
     links = set(model.links)
     contact = writer.element(root, 'contact')
     for a, b, reason in pairs:
         if reason in EXCLUDED_REASONS and prefix + a in links and prefix + b in links:
             writer.element(contact, 'exclude', body1=prefix + a, body2=prefix + b)
     equality = writer.element(root, 'equality')
+    linkage = writer.figures['gripper']
     for joint in model.robot.joints:
         if joint.mimic is not None:
             writer.element(equality, 'joint', name='%s_mimic' % joint.name, joint1=joint.name,
-                           joint2=joint.mimic.joint, solref=MIMIC_SOLREF,
+                           joint2=joint.mimic.joint, solref=_numbers(linkage['linkage_solref']),
+                           solimp=_numbers(linkage['linkage_solimp']),
                            polycoef=_numbers((joint.mimic.offset or 0.0,
                                               1.0 if joint.mimic.multiplier is None
                                               else joint.mimic.multiplier,
                                               0, 0, 0)))
-    finger = prefix + FINGER_JOINT
-    if finger in model.joints:
-        actuator = writer.element(root, 'actuator')
-        limit = model.joints[finger].limit
-        writer.element(actuator, 'position', name=finger, joint=finger,
-                       ctrlrange=_numbers((limit.lower, limit.upper)), **FINGER_ACTUATOR)
+    writer.actuators(root)
+    writer.sensors(root)
     options = ', '.join('%s=%s' % (k, mappings[k] or "''") for k in sorted(mappings))
     root.insertBefore(writer.doc.createComment(
         ' Exported by ur3_ft_gripper_description export_mjcf (%s); meshes in the folder beside this file. '

@@ -1,0 +1,29 @@
+"""The simulated cell on physics (MuJoCo): the arm, the FT 300, the 2F-140 and a world, without ROS.
+
+* ``world``: the world file (a table and objects), checked field by field;
+* ``cell``: ``Cell``, one MuJoCo model of export_mjcf's robot and a world,
+  stepped in whole timesteps: the arm's servos, the FT 300's reading, the
+  finger drive, the objects, the protective stop;
+* ``joint_motion``: the arm's joint-motion interface (HOLD, SERVO, MOVE,
+  VELOCITY) on a Cell, beside the kinematic one.
+
+MuJoCo is optional: only this package imports it, and only when a Cell is
+made; without it, ``require_mujoco`` raises ``MissingMuJoCo``, whose message
+is one line with the install command.
+"""
+
+INSTALL = 'pip install mujoco (rosdep key python3-mujoco-pip)'
+
+
+class MissingMuJoCo(ImportError):
+    """MuJoCo is not installed; the message is one line with the install command."""
+
+
+def require_mujoco():
+    """The mujoco module, or MissingMuJoCo naming the install command."""
+    try:
+        import mujoco
+    except ImportError as exc:
+        raise MissingMuJoCo('physics needs MuJoCo, which does not import here (%s): %s'
+                            % (exc, INSTALL)) from None
+    return mujoco

@@ -1,0 +1,146 @@
+"""The private link between the physics cell and the FT 300 and 2F-140 nodes (no ROS).
+
+The cell lives in the arm's process, which steps it at the controller's
+rate; the simulated FT 300 (robotiq_ft_sensor) and 2F-140 (robotiq2FGripper)
+keep their own processes and node names, and reach the cell through a local
+socket, never through a ROS topic of this package's invention. The socket is
+the standard library's ``multiprocessing.connection`` over AF_UNIX, in a
+folder only its user can enter, with an optional shared key (HMAC
+challenge, ``authkey``).
+
+Protocol: request and reply are tuples, one reply per request, in order.
+
+    ('hello', VERSION)              -> ('hello', VERSION, {'time': s, 'ft_frame': name or None,
+                                        'gripper': None or {'min_opening': m, 'max_opening': m,
+                                                            'grip_force_range': (N, N)}})
+    ('wrench',)                     -> ('wrench', time, (fx, fy, fz, tx, ty, tz))
+                                       the FT 300's reading (N, N m, sensor frame, the tool
+                                       side on the sensor), no zero and no noise: the node's
+    ('finger', opening, speed, force) -> ('finger', time, state)
+                                       command the fingers (m, m/s, N), then their state
+    ('finger',)                     -> ('finger', time, state)     the state alone
+    anything else, or a failure     -> ('error', 'one line')
+
+`time` is the cell's simulated time (s); `state` is the cell's FingerState as a dict
+(opening, angle, velocity, torque, grip_force, target, ramp, closing, motion). A client
+says hello first; a server of another VERSION answers ('error', ...).
+"""
+
+import os
+import threading
+from multiprocessing import AuthenticationError
+from multiprocessing.connection import Client, Listener
+
+VERSION = 1
+
+
+class LinkError(RuntimeError):
+    """The cell's side refused a request or is gone; the message is one line."""
+
+
+class CellServer(object):
+    """Serves `cell` at the AF_UNIX socket `path`, one thread per client.
+
+    The arm's loop steps the cell holding `lock`; requests are answered holding it too.
+    """
+
+    def __init__(self, cell, path, authkey=None, lock=None):
+        self.cell, self.path = cell, path
+        self.lock = lock or threading.RLock()
+        folder = os.path.dirname(os.path.abspath(path))
+        os.makedirs(folder, mode=0o700, exist_ok=True)
+        if os.path.exists(path):
+            os.unlink(path)  # left by a process that died; a live server would still hold it open
+        self._listener = Listener(path, family='AF_UNIX', authkey=authkey)
+        self._closed = False
+        self._thread = threading.Thread(target=self._accept, name='cell link', daemon=True)
+        self._thread.start()
+
+    def close(self):
+        self._closed = True
+        self._listener.close()
+        if os.path.exists(self.path):
+            os.unlink(self.path)
+
+    def _accept(self):
+        while not self._closed:
+            try:
+                connection = self._listener.accept()
+            except (OSError, EOFError, AuthenticationError):
+                if self._closed:
+                    return
+                continue  # a client that failed the key or hung up at once
+            threading.Thread(target=self._serve, args=(connection,), name='cell link client',
+                             daemon=True).start()
+
+    def _serve(self, connection):
+        with connection:
+            while True:
+                try:
+                    request = connection.recv()
+                except (EOFError, OSError):
+                    return
+                try:
+                    reply = self.answer(request)
+                except Exception as exc:  # one line back to the client; the server goes on
+                    reply = ('error', '%s: %s' % (type(exc).__name__, ' '.join(str(exc).split())))
+                connection.send(reply)
+
+    def answer(self, request):
+        """The reply to one request (see the module's protocol)."""
+        if not isinstance(request, tuple) or not request:
+            return ('error', 'a request is a tuple: (name, arguments...)')
+        name, arguments = request[0], request[1:]
+        cell = self.cell
+        with self.lock:
+            if name == 'hello':
+                if arguments != (VERSION,):
+                    return ('error', 'this cell speaks link version %d, not %r' % (VERSION, arguments))
+                gripper = None
+                if cell.gripper is not None:
+                    gripper = dict(min_opening=cell.gripper.min_opening, max_opening=cell.gripper.max_opening,
+                                   grip_force_range=tuple(cell.grip_force_range))
+                return ('hello', VERSION, dict(time=cell.time, ft_frame=cell.ft_frame, gripper=gripper))
+            if name == 'wrench' and not arguments:
+                return ('wrench', cell.time, tuple(float(v) for v in cell.wrench()))
+            if name == 'finger' and len(arguments) in (0, 3):
+                if arguments:
+                    cell.command_finger(*(float(v) for v in arguments))
+                return ('finger', cell.time, dict(vars(cell.finger())))
+        return ('error', 'unknown request %r: use hello, wrench or finger' % (request,))
+
+
+class CellClient(object):
+    """A node's side of the link: wrench(), finger(...) as the protocol says; LinkError if refused."""
+
+    def __init__(self, path, authkey=None):
+        try:
+            self._connection = Client(path, family='AF_UNIX', authkey=authkey)
+        except (OSError, EOFError) as exc:
+            raise LinkError('no physics cell at %s (%s): start the arm with physics first' % (
+                path, exc.strerror if isinstance(exc, OSError) and exc.strerror else exc)) from None
+        except AuthenticationError:
+            raise LinkError('the physics cell at %s refused this key: give both sides the same one' % path) from None
+        self.info = self._ask('hello', VERSION)[2]
+
+    def _ask(self, *request):
+        try:
+            self._connection.send(request)
+            reply = self._connection.recv()
+        except (OSError, EOFError) as exc:
+            raise LinkError('the physics cell closed the link (%s)' % (exc,)) from None
+        if reply[0] == 'error':
+            raise LinkError(reply[1])
+        return reply
+
+    def wrench(self):
+        """(time, (fx, fy, fz, tx, ty, tz)) of the FT 300."""
+        return self._ask('wrench')[1:]
+
+    def finger(self, opening=None, speed=None, force=None):
+        """(time, state dict); with opening, speed and force, the fingers are commanded first."""
+        request = ('finger',) if opening is None else ('finger', opening, speed, force)
+        return self._ask(*request)[1:]
+
+    def close(self):
+        self._connection.close()

@@ -1,0 +1,157 @@
+"""The physics cell against known truths: a mass's weight, an object's width, a contact's force.
+
+These tests need MuJoCo (PyPI: mujoco 4.0.0 on Python 3.11, 3.2.3 on 3.8). Without it every test
+that needs it fails with the cell's one line naming the install command; none is skipped.
+
+The robot is the package's default model (UR3 + FT 300 + 2F-140), expanded and exported once
+per session; each test builds its own Cell from that file and a world written for it.
+"""
+import math
+import os
+import shutil
+import tempfile
+
+import numpy as np
+import pytest
+
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices.physics import MissingMuJoCo, require_mujoco
+from ur3_ft_gripper_description.devices.physics.joint_motion import JointCommand, PhysicsJointMotion
+from ur3_ft_gripper_description.devices.physics.world import load_world
+from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+from ur3_ft_gripper_description.model import description, export, mjcf
+
+# The simulated arm's start pose (devices/ur_arm/settings.py): elbow bent, tool pointing down.
+# The 2F-140's pads then hang over the table with their lower edges 60 mm above its top (z = 0).
+START = np.array([0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0])
+ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint',
+              'wrist_1_joint', 'wrist_2_joint', 'wrist_3_joint')
+STANDARD_GRAVITY = 9.80665
+TABLE = """
+table:
+  size: [1.0, 1.2, 0.04]
+  pose: [0.2, 0.0, -0.02]
+  friction: 0.5
+"""
+
+
+@pytest.fixture(scope='session')
+def mujoco():
+    try:
+        return require_mujoco()
+    except MissingMuJoCo as exc:
+        missing = str(exc)
+    pytest.fail(missing, pytrace=False)  # outside the except: the one line, without the ImportError's story
+
+
+@pytest.fixture(scope='session')
+def robot():
+    """(MJCF path, URDF text) of the default model, exported once."""
+    folder = tempfile.mkdtemp(prefix='ur3_ft_gripper_physics_')
+    mappings = export.model_mappings()
+    doc = description.expand_model(mappings)
+    path = os.path.join(folder, 'robot.xml')
+    mjcf.write_mjcf(doc, mappings, path)
+    yield path, description.to_xml(doc)
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.fixture
+def make_cell(mujoco, robot, tmp_path):
+    """make_cell(world text, initial arm) -> a Cell of the default model in that world."""
+    from ur3_ft_gripper_description.devices.physics.cell import Cell
+
+    def make(world_text=TABLE, initial_arm=START):
+        path = tmp_path / 'world.yaml'
+        path.write_text(world_text)
+        return Cell(robot[0], robot[1], load_world(str(path)), initial_arm=initial_arm)
+    return make
+
+
+@pytest.fixture(scope='session')
+def pad_centre(robot):
+    """(x, y) of the pads' centre line in the start pose (base_link): the model's gripper_tcp."""
+    model = kinematics.Model(robot[1])
+    positions = dict(zip(ARM_JOINTS, START))
+    return tuple(model.transform(model.root(), 'gripper_tcp', positions)[:2, 3])
+
+
+@pytest.fixture
+def between_pads(pad_centre):
+    """between_pads(width, ...) -> a world with an object standing on the table between the open pads."""
+    def world(width, height=0.12, mass=1.0, depth=0.06, shape='box', quat_yaw=0.0, mesh=None):
+        if shape == 'box':
+            size = 'size: [%r, %r, %r]' % (depth, width, height)
+        elif shape == 'cylinder':
+            size = 'size: [%r, %r]' % (width, height)
+        else:
+            size = 'mesh: %s' % mesh
+        z = height / 2.0 if shape != 'mesh' else 0.0
+        return TABLE + """
+objects:
+  - name: held
+    shape: %s
+    %s
+    pose: [%r, %r, %r, 0, 0, %r]
+    mass: %r
+    friction: 0.5
+""" % (shape, size, pad_centre[0], pad_centre[1], z, quat_yaw, mass)
+    return world
+
+
+def in_gripper(cell, name):
+    """Position (m) of object `name` in the 2F-140's base frame: what moves when it slips."""
+    base, rotation = cell.body_pose(cell.gripper_base)
+    return rotation.T.dot(cell.object_pose(name)[0] - base)
+
+
+class Arm(object):
+    """The joint-motion interface over a cell, and Cartesian moves of tool0 through the model's IK."""
+
+    def __init__(self, cell):
+        self.cell = cell
+        self.motion = PhysicsJointMotion(cell)
+        self.kinematics = ArmKinematics(cell.urdf_text, cell.arm_joints, 'base', 'tool0')
+
+    def hold(self, seconds, dt=0.002):
+        for _ in range(int(round(seconds / dt))):
+            self.motion.step(JointCommand('HOLD'), dt)
+
+    def move_tool(self, offset, duration, dt=0.002, until=None):
+        """Move tool0 by `offset` (m, in the robot's base frame) along a line, smoothly; stop early if until()."""
+        seed = self.motion.reference.copy()
+        start = self.kinematics.forward(seed)
+        steps = int(round(duration / dt))
+        for k in range(1, steps + 1):
+            s = k / float(steps)
+            target = start.copy()
+            target[:3, 3] += np.asarray(offset) * (0.5 - 0.5 * math.cos(math.pi * s))
+            seed = self.kinematics.inverse(target, seed, tolerance=1e-10)  # smooth: no IK jitter
+            assert seed is not None, 'the line leaves the arm\'s reach'
+            self.motion.step(JointCommand('MOVE', seed), dt)
+            if until is not None and until():
+                return True
+        return False
+
+    def move_joints(self, delta, duration, dt=0.002):
+        """Move the joints by `delta` (rad) along a quintic in `duration` s (MOVE, velocity fed)."""
+        start = self.motion.reference.copy()
+        delta = np.asarray(delta, dtype=float)
+        steps = int(round(duration / dt))
+        for k in range(1, steps + 1):
+            s = k / float(steps)
+            blend = 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+            rate = (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / duration
+            self.motion.step(JointCommand('MOVE', start + delta * blend, delta * rate), dt)
+            yield k * dt
+
+
+def close_on(cell, force, speed=0.1, seconds=2.0):
+    """Close the fingers fully at `speed` (m/s) with `force` (N); return the FingerState once stopped."""
+    cell.command_finger(0.0, speed, force)
+    for _ in range(int(round(seconds / 0.01))):
+        cell.step(0.01)
+        state = cell.finger()
+        if state.motion != 'moving':
+            return state
+    return cell.finger()

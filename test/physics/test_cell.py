@@ -1,0 +1,207 @@
+"""The physics cell's arm, mass and safety against the model's figures and the robot's behaviour.
+
+Known truths: the masses of ur_description and of Robotiq's manual, the gravity torques the
+URDF's masses make at a pose (its own forward kinematics), commanded speeds, the servoj lag law
+of the kinematic simulation, and the force limit of the protective stop.
+"""
+import ast
+import math
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import rospkg
+import yaml
+
+from conftest import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices.physics.joint_motion import JointCommand
+from ur3_ft_gripper_description.devices.ur_arm import joints
+from ur3_ft_gripper_description.model import inertials
+
+PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
+
+
+def manual_total_mass():
+    """ur_description's UR3 links plus Robotiq's FT 300 + 2F-140 (config/robotiq_mass.yaml)."""
+    path = os.path.join(rospkg.RosPack().get_path('ur_description'), 'config', 'ur3', 'physical_parameters.yaml')
+    with open(path) as f:
+        inertia = yaml.safe_load(f)['inertia_parameters']
+    arm = sum(inertia['%s_mass' % link] for link in
+              ('base', 'shoulder', 'upper_arm', 'forearm', 'wrist_1', 'wrist_2', 'wrist_3'))
+    with open(os.path.join(PACKAGE_DIR, 'config', 'robotiq_mass.yaml')) as f:
+        robotiq = yaml.safe_load(f)['ft300_with_2f140']['mass']
+    return arm + robotiq
+
+
+def test_the_robots_mass_is_the_models_and_the_manuals(make_cell, robot):
+    cell = make_cell('', START)
+    simulated = float(np.sum(cell.model.body_mass[cell.robot_bodies]))
+    urdf = sum(link.inertial.mass for link in kinematics.Model(robot[1]).robot.links if link.inertial)
+    assert simulated == pytest.approx(urdf, rel=1e-9)
+    assert simulated == pytest.approx(manual_total_mass(), rel=0.02)
+
+
+def gravity_torques(urdf_text, arm):
+    """Each arm joint's torque holding the links below it against gravity (the URDF's masses, its FK)."""
+    model = kinematics.Model(urdf_text)
+    positions = dict(zip(ARM_JOINTS, arm))
+    torques = []
+    for name in ARM_JOINTS:
+        joint = model.joints[name]
+        frame = model.transform(model.root(), joint.child, positions)  # at the joint, in its axes
+        own = model.robot.link_map[joint.child].inertial
+        mass, com = inertials.combine_masses([inertials.mass_below(model, joint.child, positions),
+                                              (own.mass, kinematics.pose_matrix(own.origin)[:3, 3])])
+        lever = frame[:3, :3].dot(com)
+        axis = frame[:3, :3].dot(joint.axis)
+        torques.append(-float(np.cross(lever, [0.0, 0.0, -mass * STANDARD_GRAVITY]).dot(axis)))
+    return np.array(torques)
+
+
+@pytest.mark.parametrize('offset', [[0.0] * 6, [0.5, 0.3, -0.4, 0.6, 0.8, 0.2]], ids=['start', 'other'])
+def test_at_rest_the_efforts_hold_the_models_weight(make_cell, robot, offset):
+    arm = START + np.array(offset)
+    cell = make_cell('', arm)
+    Arm(cell).hold(1.0)
+    expected = gravity_torques(robot[1], arm)
+    assert np.allclose(cell.arm_effort, expected, atol=0.01 + 0.005 * np.max(np.abs(expected))), (
+        cell.arm_effort, expected)
+    assert np.max(np.abs(cell.arm_position - arm)) < 1e-4  # it holds the start pose: no sag
+
+
+def test_hold_keeps_the_start_pose_and_never_teleports(make_cell):
+    cell = make_cell('', START)
+    motion = Arm(cell).motion
+    assert np.array_equal(motion.position, START)
+    for _ in range(500):
+        motion.step(JointCommand('HOLD'), 0.002)
+        assert np.max(np.abs(motion.position - START)) < 1e-4
+    # A far command: the reference leaves for it at the joints' velocity limits at once, and the
+    # arm after it, from where it is, never jumping: catching up with a reference that took no
+    # time to accelerate, the servo overshoots the limits for a while (measured: up to 1.6 times),
+    # where a teleport would move a joint by the whole distance. Streamed trajectories accelerate,
+    # and the arm stays on them (the servo test below).
+    far = START + np.array([1.0, 0.5, -0.5, 1.0, 1.0, 2.0])
+    previous = motion.position
+    for _ in range(1500):
+        motion.step(JointCommand('MOVE', far), 0.002)
+        assert np.all(np.abs(motion.position - previous) <= cell.arm_velocity_limits * 0.002 * 2.0)
+        previous = motion.position
+    assert np.max(np.abs(motion.position - far)) < 1e-3
+
+
+def test_velocity_commands_move_the_joints_at_that_speed(make_cell):
+    cell = make_cell('', START)
+    motion = Arm(cell).motion
+    speed = np.array([0.2, -0.1, 0.15, 0.3, -0.3, 0.5])
+    for _ in range(250):
+        motion.step(JointCommand('VELOCITY', velocity=speed), 0.002)
+    before, time = motion.position, cell.time
+    for _ in range(250):
+        motion.step(JointCommand('VELOCITY', velocity=speed), 0.002)
+    assert np.allclose((motion.position - before) / (cell.time - time), speed, rtol=0.01, atol=1e-3)
+    assert np.allclose(motion.velocity, speed, rtol=0.02, atol=2e-3)
+
+
+def test_servo_follows_streamed_positions_with_servojs_lag(make_cell):
+    """Positions streamed at 500 Hz along a sine: the joints follow the kinematic simulation's lag law."""
+    cell = make_cell('', START)
+    motion = Arm(cell).motion
+    amplitude = np.array([0.2, 0.1, -0.15, 0.3, 0.3, 0.5])
+    expected = START.copy()
+    worst = 0.0
+    for k in range(1, 1001):
+        stream = START + amplitude * math.sin(2.0 * math.pi * 0.5 * k * 0.002)
+        motion.step(JointCommand('SERVO', stream), 0.002)
+        expected, _ = joints.follow(expected, stream, 0.002, motion.lookahead, cell.arm_velocity_limits,
+                                    cell.arm_lower, cell.arm_upper)
+        worst = max(worst, float(np.max(np.abs(motion.position - expected))))
+    assert worst < 0.0005, 'the servo strayed %.4f rad from the lag law' % worst
+
+
+def test_pushing_into_the_table_ends_in_a_protective_stop_that_holds_the_arm(make_cell):
+    cell = make_cell(TABLE, START)
+    arm = Arm(cell)
+    close_on(cell, 60.0, speed=0.25)
+    forces = []
+
+    def stopped():
+        forces.append(float(np.linalg.norm(cell.contact_force())))
+        return cell.protective_stop is not None
+    assert arm.move_tool([0.0, 0.0, -0.12], 3.0, until=stopped), 'no protective stop'
+    assert 'exceeded the 150 N limit' in cell.protective_stop
+    assert max(forces) > 150.0
+    held = cell.arm_position
+    for _ in range(500):
+        arm.motion.step(JointCommand('MOVE', START + np.array([0.0, 0.3, 0.0, 0.0, 0.0, 0.0])), 0.002)
+    assert np.max(np.abs(cell.arm_position - held)) < 0.002, 'the arm moved during the protective stop'
+    assert np.linalg.norm(cell.contact_force()) < 150.0
+    arm.motion.clear_protective_stop()
+    assert arm.move_tool([0.0, 0.0, 0.05], 1.0) is False and cell.protective_stop is None
+    assert np.linalg.norm(cell.contact_force()) < 1.0, 'the arm did not lift off after the stop was cleared'
+
+
+def test_the_default_world_loads_with_objects_the_gripper_can_hold(make_cell):
+    with open(os.path.join(PACKAGE_DIR, 'config', 'worlds', 'default.yaml')) as f:
+        text = f.read()
+    cell = make_cell(text, START)
+    assert len(cell.objects) >= 2
+    start = {name: cell.object_pose(name)[0] for name in cell.objects}
+    cell.step(1.0)
+    for name in cell.objects:
+        solid = cell.world.by_name(name)
+        narrowest = min(solid.size[:2]) if solid.shape == 'box' else solid.size[0]
+        assert narrowest < cell.gripper.max_opening, name
+        assert np.linalg.norm(cell.object_pose(name)[0] - start[name]) < 0.001, name  # resting
+        reach = math.hypot(*start[name][:2])
+        assert reach < 0.45, '%s is %.2f m from the base: beyond the UR3 with the tool down' % (name, reach)
+
+
+def run_python(code):
+    return subprocess.run([sys.executable, '-c', code], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                          universal_newlines=True, timeout=120)
+
+
+def test_without_mujoco_physics_says_so_in_one_line_with_the_install_command():
+    code = ('import sys; sys.modules["mujoco"] = None\n'
+            'from ur3_ft_gripper_description.devices.physics import MissingMuJoCo\n'
+            'from ur3_ft_gripper_description.devices.physics.cell import Cell\n'
+            'try:\n    Cell.build()\nexcept MissingMuJoCo as exc:\n    print(exc)\n')
+    run = run_python(code)
+    assert run.returncode == 0, run.stderr
+    lines = run.stdout.strip().splitlines()
+    assert len(lines) == 1 and 'pip install mujoco' in lines[0] and 'python3-mujoco-pip' in lines[0], run.stdout
+
+
+def test_the_kinematic_simulation_never_imports_mujoco():
+    """Only the physics package imports MuJoCo, inside a function; importing any module imports none."""
+    source = os.path.join(PACKAGE_DIR, 'src', 'ur3_ft_gripper_description')
+    importers = []
+    for folder, _, files in os.walk(source):
+        for name in files:
+            if name.endswith('.py'):
+                path = os.path.join(folder, name)
+                with open(path) as f:
+                    tree = ast.parse(f.read(), path)
+                for node in ast.walk(tree):
+                    names = ([alias.name for alias in node.names] if isinstance(node, ast.Import) else
+                             [node.module] if isinstance(node, ast.ImportFrom) else [])
+                    if any(n and n.split('.')[0] == 'mujoco' for n in names):
+                        importers.append((os.path.relpath(path, source), node.col_offset))
+    assert importers == [('devices/physics/__init__.py', 8)], importers  # indented: in require_mujoco
+    modules = [os.path.relpath(os.path.join(folder, name), source)[:-3].replace(os.sep, '.')
+               for folder, _, files in os.walk(source) for name in files
+               if name.endswith('.py') and name != '__init__.py']
+    code = ('import importlib, sys\n'
+            'for module in %r:\n'
+            '    try:\n'
+            '        importlib.import_module("ur3_ft_gripper_description." + module)\n'
+            '    except ImportError as exc:\n'
+            '        if "mujoco" in str(exc): raise\n'
+            'print("mujoco" in sys.modules)\n' % sorted(modules))
+    run = run_python(code)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout.strip() == 'False'

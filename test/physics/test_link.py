@@ -1,0 +1,82 @@
+"""The link between the cell (the arm's process) and the FT 300 and 2F-140 nodes' processes."""
+import json
+import subprocess
+import sys
+import threading
+import time
+
+import pytest
+
+from conftest import START
+from ur3_ft_gripper_description.devices.physics.link import CellClient, CellServer, LinkError
+
+# A node's side, in a process of its own: hello, the wrench, then close the fingers and wait.
+NODE = '''
+import json, sys, time
+from ur3_ft_gripper_description.devices.physics.link import CellClient
+client = CellClient(sys.argv[1], authkey=b'key')
+out = {'info': client.info, 'wrench': client.wrench()}
+client.finger(0.0, 0.15, 60.0)
+deadline = time.monotonic() + 60.0
+while time.monotonic() < deadline:
+    stamp, state = client.finger()
+    if state['motion'] != 'moving':
+        break
+    time.sleep(0.01)
+out['finger'] = state
+print(json.dumps(out))
+'''
+
+
+@pytest.fixture
+def served(make_cell, between_pads, tmp_path):
+    cell = make_cell(between_pads(0.05, mass=0.3), START)
+    server = CellServer(cell, str(tmp_path / 'link' / 'cell.sock'), authkey=b'key')
+    running = [True]
+
+    def arm_loop():  # what the arm's node does at its loop rate
+        while running[0]:
+            with server.lock:
+                cell.step(0.008)
+            time.sleep(0.001)
+    thread = threading.Thread(target=arm_loop, daemon=True)
+    thread.start()
+    yield cell, server
+    running[0] = False
+    thread.join()
+    server.close()
+
+
+def test_a_node_process_reads_the_wrench_and_grasps_through_the_link(served):
+    cell, server = served
+    run = subprocess.run([sys.executable, '-c', NODE, server.path], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, universal_newlines=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    out = json.loads(run.stdout)
+    assert out['info']['ft_frame'] == 'robotiq_ft_frame_id'
+    assert out['info']['gripper']['grip_force_range'] == [10.0, 125.0]
+    stamp, wrench = out['wrench']
+    assert stamp >= 0.0 and wrench[2] == pytest.approx(0.975 * 9.80665, rel=0.02)  # the 2F-140 hanging
+    assert out['finger']['motion'] == 'on_object'
+    assert out['finger']['opening'] == pytest.approx(0.05, abs=0.001)
+    with server.lock:
+        assert cell.finger().motion == 'on_object'
+
+
+def test_a_wrong_key_or_request_is_refused_in_one_line(served):
+    cell, server = served
+    with pytest.raises(LinkError) as raised:
+        CellClient(server.path, authkey=b'wrong')
+    assert 'refused this key' in str(raised.value)
+    client = CellClient(server.path, authkey=b'key')
+    with pytest.raises(LinkError) as raised:
+        client._ask('teleport', 1.0)
+    assert 'unknown request' in str(raised.value) and '\n' not in str(raised.value)
+    assert client.wrench()[1][2] > 0  # the link still serves
+    client.close()
+
+
+def test_no_cell_is_one_line(tmp_path):
+    with pytest.raises(LinkError) as raised:
+        CellClient(str(tmp_path / 'nothing.sock'))
+    assert 'no physics cell at' in str(raised.value) and '\n' not in str(raised.value)
