@@ -166,7 +166,8 @@ def test_the_arm_holds_its_start_pose_until_a_controller_moves_it(arm):
 # -- controller_manager and controller_stopper ---------------------------------------------------
 
 def test_switching_strict_and_best_effort(arm):
-    states = lambda: {name: state for name, state, _, _, _ in arm.list_controllers()}  # noqa: E731
+    def states():
+        return {name: state for name, state, _, _, _ in arm.list_controllers()}
     before = states()
     ok, message = arm.switch_controllers(['no_such_controller'], ['scaled_pos_joint_traj_controller'], cm.STRICT)
     assert not ok and 'no_such_controller' in message and states() == before

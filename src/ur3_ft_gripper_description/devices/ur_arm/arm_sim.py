@@ -55,7 +55,8 @@ from .settings import read_settings
 from .trajectory import GoalError, JointTolerance, Point
 
 NODE = 'ur_hardware_interface'
-ROBOT_MODES = {getattr(RobotMode, n): n for n in dir(RobotMode) if n.isupper() and isinstance(getattr(RobotMode, n), int)}
+ROBOT_MODES = {getattr(RobotMode, n): n for n in dir(RobotMode)
+               if n.isupper() and isinstance(getattr(RobotMode, n), int)}
 
 
 class ArmSim(object):

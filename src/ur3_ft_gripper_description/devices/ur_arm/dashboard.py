@@ -20,8 +20,8 @@ class DashboardServices(object):
         self.core, self.lock = core, lock
         for name, (command, expected) in DASHBOARD_TRIGGERS.items():
             rospy.Service('~dashboard/' + name, Trigger, self._trigger(command, expected))
-        rospy.Service('~dashboard/connect', Trigger, lambda req: (True, 'Connected: Universal Robots Dashboard '
-                                                                    'Server (simulated)'))
+        rospy.Service('~dashboard/connect', Trigger,
+                      lambda req: (True, 'Connected: Universal Robots Dashboard Server (simulated)'))
         rospy.Service('~dashboard/add_to_log', dash_srv.AddToLog, lambda req: self._answer(
             'addToLog ' + req.message, '(Added log message|No log message to add)$'))
         rospy.Service('~dashboard/popup', dash_srv.Popup, lambda req: self._answer(

@@ -64,9 +64,6 @@ DASHBOARD_TRIGGERS = {
 EXPECTED_ANSWER = {command: expected for command, expected in DASHBOARD_TRIGGERS.values()}
 
 
-def answer_matches(answer, expected):
-    return re.match(expected, answer) is not None
-
 # Digital outputs: 8 standard (0-7), 8 configurable (8-15), 2 tool (16-17); flags: none
 # reported; analog: the 2 standard inputs and 2 standard outputs, which is all the driver's
 # io_states carries (the tool's analog inputs are in its tool_data).
@@ -74,6 +71,10 @@ DIGITAL_PINS = 18
 ANALOG_OUTPUTS = 2
 ANALOG_INPUTS = 2
 TOOL_VOLTAGES = (0, 12, 24)
+
+
+def answer_matches(answer, expected):
+    return re.match(expected, answer) is not None
 
 
 class RobotState(object):
