@@ -126,3 +126,20 @@ def replace_section(path, key, text):
         new = (old.rstrip() + '\n\n' if old.strip() else '') + block + '\n'
     with open(path, 'w') as f:
         f.write(new)
+
+
+def report_soak(record, section, heading, setting, load_before, rows, problems, label):
+    """Print a soak's table and verdict; with `record` (a RESULTS.md), write them into its `section` too.
+
+    `setting`: one sentence on what ran; `rows`: '| what | figures |' lines. The exit status: 0 if no problems.
+    """
+    verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems[:10]) + (
+        ' (and %d more)' % (len(problems) - 10) if len(problems) > 10 else '')
+    table = '\n'.join(['| | |', '| --- | --- |'] + rows)
+    print(table)
+    print('%s: %s' % (label, verdict))
+    if record:
+        replace_section(record, section, '\n'.join([
+            heading, '', '%s, %s; load average before: %s. %s' % (now_text(), machine(), load_before, setting), '',
+            table, '', 'Result: %s' % verdict]))
+    return 0 if not problems else 1

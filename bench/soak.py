@@ -212,18 +212,10 @@ def main(argv=None):
         1e3 * LONG_GAP_S, len(stalls.stalls), 1e3 * max([d for _, d in stalls.stalls] or [0.0])))
     rows.append('| machine during the measurement: CPU steal, major page faults | %.1f s, %d |' % (steal, faults))
     rows.append('| gripper follows the last command | %s |' % ('yes' if status else 'no'))
-    verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems)
-    table = '\n'.join(['| | |', '| --- | --- |'] + rows)
-    print(table)
-    print('soak: %s' % verdict)
-    if args.record:
-        benchlib.replace_section(args.record, 'soak', '\n'.join([
-            '## Soak (`bash tools/quickstart soak`)', '',
-            '%s, %s; load average before: %s. The view launch (headless, sim:=true) on its own '
-            'master; ft300_sim at 100 Hz, register commands sweeping rPR 28..228 at 10 Hz.' % (
-                benchlib.now_text(), benchlib.machine(), load_before), '',
-            table, '', 'Result: %s' % verdict]))
-    return 0 if not problems else 1
+    return benchlib.report_soak(
+        args.record, 'soak', '## Soak (`bash tools/quickstart soak`)',
+        'The view launch (headless, sim:=true) on its own master; ft300_sim at 100 Hz, register commands sweeping '
+        'rPR 28..228 at 10 Hz.', load_before, rows, problems, 'soak')
 
 
 load_before = benchlib.load_average()

@@ -13,18 +13,11 @@ import os
 import time
 
 import benchlib
+# The joints, poses and controllers of the driver's documented interface, as its tests name them.
+from ur_driver_sim_check import AWAY, COMMANDING, HOME, HW, JOINTS
 
 RSS_LIMIT_MB = 5.0
 NODE = '/ur_hardware_interface'
-HW = '/ur_hardware_interface/'
-JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
-          'wrist_3_joint']
-HOME = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
-AWAY = [0.4, -1.3, 1.2, -1.2, -1.2, 0.6]
-COMMANDING = ['scaled_pos_joint_traj_controller', 'pos_joint_traj_controller', 'scaled_vel_joint_traj_controller',
-              'vel_joint_traj_controller', 'joint_group_vel_controller', 'forward_joint_traj_controller',
-              'forward_cartesian_traj_controller', 'twist_controller', 'pose_based_cartesian_traj_controller',
-              'joint_based_cartesian_traj_controller']
 TIMEOUT = 30.0
 
 
@@ -187,16 +180,7 @@ def run(args, seconds, record_section):
         '| ur_hardware_interface CPU (500 Hz loop), mean over the measurement | %.0f %% of one core |' % cpu,
         '| goals, programs and switches that failed | %d |' % len(problems),
     ]
-    verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems[:10]) + (
-        ' (and %d more)' % (len(problems) - 10) if len(problems) > 10 else '')
-    table = '\n'.join(['| | |', '| --- | --- |'] + rows)
-    print(table)
-    print('soak (arm): %s' % verdict)
-    if args.record:
-        benchlib.replace_section(args.record, record_section, '\n'.join([
-            '## Soak of the simulated arm (`bash tools/quickstart soak --what arm`)', '',
-            '%s, %s; load average before: %s. ur_ft_gripper_bringup.launch sim:=true ur_type:=ur5e on its own '
-            'master, driven through ur_robot_driver\'s interface only.' % (
-                benchlib.now_text(), benchlib.machine(), load_before), '',
-            table, '', 'Result: %s' % verdict]))
-    return 0 if not problems else 1
+    return benchlib.report_soak(
+        args.record, record_section, '## Soak of the simulated arm (`bash tools/quickstart soak --what arm`)',
+        'ur_ft_gripper_bringup.launch sim:=true ur_type:=ur5e on its own master, driven through '
+        'ur_robot_driver\'s interface only.', load_before, rows, problems, 'soak (arm)')
