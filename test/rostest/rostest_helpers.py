@@ -17,7 +17,7 @@ import rospy
 from transforms3d.quaternions import quat2mat
 
 from ur3_ft_gripper_description.devices import gripper_model
-from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_description.model.names import GRIPPER_BASE, PADS
 
 TIMEOUT = 30.0
 
@@ -39,7 +39,7 @@ def lookup(buffer, target, source, timeout=TIMEOUT):
 
 def pad_gap(buffer, fingers, prefix=''):
     """Gap between the finger pads' inner faces in TF (`fingers`: a gripper_model.GripperKinematics)."""
-    left, right = (lookup(buffer, prefix + description.GRIPPER_BASE, prefix + pad) for pad in description.PADS)
+    left, right = (lookup(buffer, prefix + GRIPPER_BASE, prefix + pad) for pad in PADS)
     return gripper_model.pad_gap(left, right, fingers.pad_thickness)
 
 

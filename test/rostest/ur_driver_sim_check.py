@@ -38,7 +38,7 @@ import rostest_helpers
 from rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
-from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_description.model.names import PADS
 
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
           'wrist_3_joint']
@@ -583,7 +583,7 @@ class ModelAlongTrajectoryTest(DriverTestBase):
             fractions = (arm - HOME) / (np.array(AWAY) - HOME)
             np.testing.assert_allclose(fractions, fractions[0], atol=1e-6, err_msg='off the trajectory')
             fractions_seen.append(fractions[0])
-            for frame in ['tool0'] + list(description.PADS):
+            for frame in ['tool0'] + list(PADS):
                 msg = self.buffer.lookup_transform(self.prefix + 'base_link', self.prefix + frame,
                                                    sample.header.stamp, rospy.Duration(1.0))
                 expected = model.transform(self.prefix + 'base_link', self.prefix + frame, positions)

@@ -11,7 +11,7 @@ import numpy as np
 import yaml
 
 from ur3_ft_gripper_description import kinematics
-from ur3_ft_gripper_description.model.description import FINGER_JOINT, PADS
+from ur3_ft_gripper_description.model.names import FINGER_JOINT, PADS
 
 
 

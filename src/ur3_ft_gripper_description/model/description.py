@@ -22,12 +22,8 @@ import re
 import subprocess
 
 from ur3_ft_gripper_description.model import inertials
-from ur3_ft_gripper_description.model.dom import child_elements
+from ur3_ft_gripper_description.model.names import GRIPPER_BASE, DescriptionError, child_elements, package_path
 
-# Names both upstream 2F-140 macros give (before the prefix).
-GRIPPER_BASE = 'robotiq_arg2f_base_link'
-FINGER_JOINT = 'finger_joint'
-PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
 # The upstream packages whose files and meshes the model uses.
 MODEL_PACKAGES = ('ur_description', 'robotiq_ft_sensor', 'robotiq_2f_140_gripper_visualization')
 # The file in ur_description/config/<ur_type>/ that each arg defaults to (in the macro).
@@ -42,10 +38,6 @@ UR_DEFAULT_FILES = {
 FRAME_NAME = re.compile(r'^[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*$')
 
 
-class DescriptionError(Exception):
-    """Bad input or environment; the message is one line naming problem and fix."""
-
-
 def ur_types(rospack=None):
     """The UR models the installed ur_description ships, in its own order (ur3, ur3e, ur5, ...).
 
@@ -57,16 +49,6 @@ def ur_types(rospack=None):
               if all(os.path.isfile(os.path.join(config, name, f)) for f in UR_DEFAULT_FILES.values())]
     return sorted(models, key=lambda name: [int(part) if part.isdigit() else part
                                             for part in re.split(r'(\d+)', name)])
-
-
-def package_path(name, rospack=None):
-    """Path of ROS package `name`, or DescriptionError naming it."""
-    import rospkg
-    try:
-        return (rospack or rospkg.RosPack()).get_path(name)
-    except rospkg.ResourceNotFound:
-        raise DescriptionError(
-            "ROS package '%s' not found on ROS_PACKAGE_PATH: install it or add its folder there" % name) from None
 
 
 def _causes(exc):

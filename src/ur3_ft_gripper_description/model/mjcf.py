@@ -29,6 +29,7 @@ from transforms3d.quaternions import mat2quat
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description, export
+from ur3_ft_gripper_description.model.names import FINGER_JOINT
 
 EXCLUDED_REASONS = ('Adjacent', 'Default', 'Always')
 MIMIC_SOLREF = '0.005 1'  # stiffer than MuJoCo's default 0.02 s: the linkage must not drift
@@ -179,7 +180,7 @@ def export_mjcf(mappings, output, matrix_path=None):
                                               1.0 if joint.mimic.multiplier is None
                                               else joint.mimic.multiplier,
                                               0, 0, 0)))
-    finger = prefix + description.FINGER_JOINT
+    finger = prefix + FINGER_JOINT
     if finger in model.joints:
         actuator = writer.element(root, 'actuator')
         limit = model.joints[finger].limit

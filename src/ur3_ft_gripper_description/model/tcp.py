@@ -20,7 +20,7 @@ differ by 1e-6 m and the mean is within 0.5e-6 m of either.
 import numpy as np
 
 from ur3_ft_gripper_description import kinematics
-from ur3_ft_gripper_description.model.description import FINGER_JOINT, GRIPPER_BASE, PADS
+from ur3_ft_gripper_description.model.names import FINGER_JOINT, GRIPPER_BASE, PADS
 
 YAML_KEY = 'gripper_tcp_in_gripper_base'
 KEYS = ('x', 'y', 'z', 'roll', 'pitch', 'yaw')

@@ -1,0 +1,32 @@
+"""What the model's modules and the simulated devices share: upstream frame names and small helpers.
+
+The bottom of the package's imports: it imports nothing of the package, so
+anything may take a frame name from here without loading the xacro engine.
+"""
+
+# Names both upstream 2F-140 macros give (before the prefix).
+GRIPPER_BASE = 'robotiq_arg2f_base_link'
+FINGER_JOINT = 'finger_joint'
+PADS = ('left_inner_finger_pad', 'right_inner_finger_pad')
+
+
+class DescriptionError(Exception):
+    """Bad input or environment; the message is one line naming problem and fix."""
+
+
+def package_path(name, rospack=None):
+    """Path of ROS package `name`, or DescriptionError naming it."""
+    import rospkg
+    try:
+        return (rospack or rospkg.RosPack()).get_path(name)
+    except rospkg.ResourceNotFound:
+        raise DescriptionError(
+            "ROS package '%s' not found on ROS_PACKAGE_PATH: install it or add its folder there" % name) from None
+
+
+def child_elements(element, tag):
+    """The direct children of `element` named `tag`, in document order (not the deeper ones).
+
+    xml.dom.minidom elements, as xacro hands documents over.
+    """
+    return [n for n in element.childNodes if n.nodeType == n.ELEMENT_NODE and n.tagName == tag]
