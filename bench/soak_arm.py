@@ -102,8 +102,9 @@ def cycle(driver, index, problems):
     check(driver.only('scaled_pos_joint_traj_controller'), 'switch to scaled_pos_joint_traj_controller')
     check(driver.goal('scaled_pos_joint_traj_controller', [(1.5, AWAY), (3.0, HOME)]) == 0, 'scaled trajectory')
     on = index % 2 == 0
-    # Ten log lines a cycle: the robot's log reaches its bound (robot_state.LOG_ENTRIES) within the run.
-    lines = ''.join('  textmsg("soak cycle %d line %d %s")\n' % (index, n, 'x' * 200) for n in range(10))
+    # A hundred long log lines a cycle: kept whole, they would grow the node by ~20 MB in 30 minutes;
+    # the robot's log reaches its bound (robot_state.LOG_ENTRIES) in the warm-up.
+    lines = ''.join('  textmsg("soak cycle %d line %d %s")\n' % (index, n, 'x' * 1000) for n in range(100))
     driver.script.publish(String(data='sec io():\n  set_configurable_digital_out(%d, %s)\n  set_tool_digital_out(0, '
                                       '%s)\n%send' % (index % 8, on, on, lines)))
     check(driver.add_to_log('soak cycle %d' % index).success, 'dashboard add_to_log')
@@ -175,7 +176,7 @@ def run(args, seconds, record_section):
     rows = [
         '| measured | %.0f s after %.0f s warm-up; %d cycles (%d in the warm-up) |' % (
             seconds, args.warmup, measured_cycles, cycles - measured_cycles),
-        '| each cycle | scaled trajectory; sec program (IO, 10 textmsg of 220 characters) and addToLog; movej '
+        '| each cycle | scaled trajectory; sec program (IO, 100 textmsg of 1000 characters) and addToLog; movej '
         'program, then play; unscaled trajectory; joint_group_vel 0.5 s; twist 0.5 s; back to the scaled '
         'controller |',
         '| ur_hardware_interface resident memory: after warm-up, max, end, growth | %.1f, %.1f, %.1f MB, +%.2f MB '
