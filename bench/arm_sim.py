@@ -44,8 +44,10 @@ def bench(ur_type, seconds, rospy):
         rospy.delete_param('/robot_description')
     description = benchlib.roslaunch('ur3_ft_gripper_description', 'load_ur_ft_gripper.launch',
                                      'ur_type:=%s' % ur_type)
-    benchlib.wait_for(lambda: rospy.has_param('/robot_description'), 60, 'the %s model loaded' % ur_type)
-    benchlib.stop(description)
+    try:
+        benchlib.wait_for(lambda: rospy.has_param('/robot_description'), 'the %s model loaded' % ur_type, 60)
+    finally:
+        benchlib.stop(description)
     launch = benchlib.roslaunch('ur3_ft_gripper_description', 'sim_arm.launch', 'ur_type:=%s' % ur_type)
     try:
         stamps = []
@@ -55,7 +57,7 @@ def bench(ur_type, seconds, rospy):
             with lock:
                 stamps.append(time.monotonic())
         sub = rospy.Subscriber('joint_states', JointState, on_state, queue_size=1000, tcp_nodelay=True)
-        benchlib.wait_for(lambda: len(stamps) > 10, 60, 'joint_states from ur_hardware_interface')
+        benchlib.wait_for(lambda: len(stamps) > 10, 'joint_states from ur_hardware_interface', 60)
         found = {}
 
         def node_pid():
@@ -65,7 +67,7 @@ def bench(ur_type, seconds, rospy):
             except (OSError, IOError):
                 return False
             return True
-        benchlib.wait_for(node_pid, 30, 'the pid of ur_hardware_interface')
+        benchlib.wait_for(node_pid, 'the pid of ur_hardware_interface', 30)
         pid = found['pid']
         loop_hz = rospy.get_param('/hardware_control_loop/loop_hz')
         time.sleep(1.0)
@@ -88,7 +90,8 @@ def bench(ur_type, seconds, rospy):
             errors.append(max(abs(e) for e in msg.error.positions))
         client = actionlib.SimpleActionClient('scaled_pos_joint_traj_controller/follow_joint_trajectory',
                                               FollowJointTrajectoryAction)
-        client.wait_for_server(rospy.Duration(60))
+        if not client.wait_for_server(rospy.Duration(60)):
+            raise RuntimeError('no action server scaled_pos_joint_traj_controller/follow_joint_trajectory')
         goal = FollowJointTrajectoryGoal()
         goal.trajectory.joint_names = JOINTS
         for t, offset, speed in ((1.5, 0.4, 0.3), (3.0, 0.7, 0.0), (4.5, 0.3, -0.3), (6.0, 0.0, 0.0)):
@@ -98,7 +101,8 @@ def bench(ur_type, seconds, rospy):
         state_sub = rospy.Subscriber('scaled_pos_joint_traj_controller/state', JointTrajectoryControllerState,
                                      on_controller_state, queue_size=1000)
         client.send_goal(goal)
-        client.wait_for_result(rospy.Duration(60))
+        if not client.wait_for_result(rospy.Duration(60)):
+            raise RuntimeError('the trajectory did not end within 60 s')
         state_sub.unregister()
         final = rospy.wait_for_message('joint_states', JointState, 10)
         end_error = max(abs(p - h) for p, h in zip(final.position, HOME))
@@ -138,23 +142,32 @@ def main(argv=None):
     if args.one:
         # Each ur_type in its own process on its own master: rospy connects a process to one master.
         master = benchlib.use_new_master()
-        import rospy
-        rospy.init_node('arm_sim_bench', disable_signals=True)
         try:
-            print(json.dumps(bench(args.one, args.seconds, rospy)))
+            import rospy
+            rospy.init_node('arm_sim_bench', disable_signals=True)
+            try:
+                print(json.dumps(bench(args.one, args.seconds, rospy)))
+            finally:
+                rospy.signal_shutdown('done')
         finally:
-            rospy.signal_shutdown('done')
             benchlib.stop(master)
         return 0
     results = []
     for ur_type in ('ur3', 'ur5e'):
         say('%s: %g s of joint_states, then a trajectory' % (ur_type, args.seconds))
-        run = subprocess.run([sys.executable, os.path.abspath(__file__), '--one', ur_type,
-                              '--seconds', str(args.seconds)], stdout=subprocess.PIPE, universal_newlines=True)
-        if run.returncode != 0:
-            say('%s: the measurement failed (exit status %d)' % (ur_type, run.returncode))
+        # Its own session, so that it ends through stop() (SIGINT), which it answers by stopping
+        # everything it started, also when this process is interrupted.
+        child = subprocess.Popen([sys.executable, os.path.abspath(__file__), '--one', ur_type,
+                                  '--seconds', str(args.seconds)], stdout=subprocess.PIPE, universal_newlines=True,
+                                 start_new_session=True)
+        try:
+            output, _ = child.communicate()
+        finally:
+            benchlib.stop(child)
+        if child.returncode != 0:
+            say('%s: the measurement failed (exit status %d)' % (ur_type, child.returncode))
             return 1
-        results.append(json.loads(run.stdout.strip().splitlines()[-1]))
+        results.append(json.loads(output.strip().splitlines()[-1]))
     text = table(results)
     print(text)
     if args.output:

@@ -17,7 +17,13 @@ CLK_TCK = os.sysconf('SC_CLK_TCK')
 
 # Free ports, masters, stopping processes and waiting: the tests' helpers, one home for both.
 sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-from rostest_helpers import free_port, master_pid, stop, wait_for  # noqa: E402,F401
+from rostest_helpers import free_port, master_pid, stop_group, wait_for  # noqa: E402,F401
+
+# Every process started here leads a session of its own, and is stopped with its whole group:
+# SIGINT first (what roslaunch and rospy expect), then SIGKILL for whatever is left, e.g. the
+# rosmaster of a roslaunch that would not end. Callers stop in `finally`, so that a failed
+# measurement leaves nothing running.
+stop = stop_group
 
 
 def use_new_master():
@@ -26,21 +32,26 @@ def use_new_master():
     uri = 'http://localhost:%d' % port
     os.environ['ROS_MASTER_URI'] = uri
     log = open(os.devnull, 'w')
-    process = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=log, stderr=log)
-    wait_for(lambda: master_pid(uri), 'rosmaster on port %d' % port, 30)
+    process = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=log, stderr=log,
+                               start_new_session=True)
+    try:
+        wait_for(lambda: master_pid(uri), 'rosmaster on port %d' % port, 30)
+    except BaseException:
+        stop(process)
+        raise
     return process
 
 
 def roslaunch(*args, env=None, log=None):
     out = open(log, 'w') if log else subprocess.DEVNULL
     return subprocess.Popen(['roslaunch'] + list(args), stdout=out, stderr=subprocess.STDOUT,
-                            env=env)
+                            env=env, start_new_session=True)
 
 
 def node(script, *args, env=None):
     """One of this package's nodes, run directly so that its pid is the node's."""
     return subprocess.Popen([sys.executable, os.path.join(PACKAGE_DIR, 'scripts', script)] + list(args),
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
 
 
 def node_pid(name):
@@ -115,3 +126,20 @@ def replace_section(path, key, text):
         new = (old.rstrip() + '\n\n' if old.strip() else '') + block + '\n'
     with open(path, 'w') as f:
         f.write(new)
+
+
+def report_soak(record, section, heading, setting, load_before, rows, problems, label):
+    """Print a soak's table and verdict; with `record` (a RESULTS.md), write them into its `section` too.
+
+    `setting`: one sentence on what ran; `rows`: '| what | figures |' lines. The exit status: 0 if no problems.
+    """
+    verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems[:10]) + (
+        ' (and %d more)' % (len(problems) - 10) if len(problems) > 10 else '')
+    table = '\n'.join(['| | |', '| --- | --- |'] + rows)
+    print(table)
+    print('%s: %s' % (label, verdict))
+    if record:
+        replace_section(record, section, '\n'.join([
+            heading, '', '%s, %s; load average before: %s. %s' % (now_text(), machine(), load_before, setting), '',
+            table, '', 'Result: %s' % verdict]))
+    return 0 if not problems else 1

@@ -363,7 +363,11 @@ def main(argv=None):
                     raise RuntimeError('%s: the model never completed in TF' % launch)
                 results['bringup'][key] = None if got is None else results['bringup'][key] + got
 
-        # The simulated devices against our model in TF, as in the view launch.
+        # The simulated devices against our model in TF, as in the view launch. The bring-ups
+        # above left their robot_description on the master: gone first, so that the wait below
+        # is for ours and ft300_sim does not read the bare arm of the last one.
+        if rospy.has_param('robot_description'):
+            rospy.delete_param('robot_description')
         launch = benchlib.roslaunch(os.path.join(benchlib.BENCH_DIR, 'bringup.launch'),
                                     'load:=%s' % our_launch, env=env)
         try:

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """Soak: the view launch (headless) for a long time, the simulated FT 300 at 100 Hz and
 gripper register commands at 10 Hz; checks that the nodes' resident memory does not grow
-and the wrench stream has no gap.
+and the wrench stream has no gap. With --what arm, the simulated arm instead (bench/soak_arm.py).
 
-    python3 bench/soak.py [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
+    python3 bench/soak.py [--what devices|arm] [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
 
 Limits: resident memory of the simulated devices (robotiq_ft_sensor,
 robotiq2FGripper, gripper_joint_states) grows by at most 5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
@@ -105,8 +105,13 @@ def main(argv=None):
     parser.add_argument('--record', help='write the numbers into this RESULTS.md (soak section)')
     parser.add_argument('--max-gap-ms', type=float, default=1e3 * GAP_LIMIT_S,
                         help='largest allowed wrench gap (default: the issue\'s %g ms)' % (1e3 * GAP_LIMIT_S))
+    parser.add_argument('--what', choices=('devices', 'arm'), default='devices',
+                        help='the simulated FT 300 and gripper (default), or the simulated arm (bench/soak_arm.py)')
     args = parser.parse_args(argv)
     seconds = args.seconds if args.seconds is not None else 60.0 * (args.minutes or 30.0)
+    if args.what == 'arm':
+        import soak_arm
+        return soak_arm.run(args, seconds, 'soak arm')
 
     master = benchlib.use_new_master()
     launch = None
@@ -207,18 +212,10 @@ def main(argv=None):
         1e3 * LONG_GAP_S, len(stalls.stalls), 1e3 * max([d for _, d in stalls.stalls] or [0.0])))
     rows.append('| machine during the measurement: CPU steal, major page faults | %.1f s, %d |' % (steal, faults))
     rows.append('| gripper follows the last command | %s |' % ('yes' if status else 'no'))
-    verdict = 'PASS' if not problems else 'FAIL: ' + '; '.join(problems)
-    table = '\n'.join(['| | |', '| --- | --- |'] + rows)
-    print(table)
-    print('soak: %s' % verdict)
-    if args.record:
-        benchlib.replace_section(args.record, 'soak', '\n'.join([
-            '## Soak (`bash tools/quickstart soak`)', '',
-            '%s, %s; load average before: %s. The view launch (headless, sim:=true) on its own '
-            'master; ft300_sim at 100 Hz, register commands sweeping rPR 28..228 at 10 Hz.' % (
-                benchlib.now_text(), benchlib.machine(), load_before), '',
-            table, '', 'Result: %s' % verdict]))
-    return 0 if not problems else 1
+    return benchlib.report_soak(
+        args.record, 'soak', '## Soak (`bash tools/quickstart soak`)',
+        'The view launch (headless, sim:=true) on its own master; ft300_sim at 100 Hz, register commands sweeping '
+        'rPR 28..228 at 10 Hz.', load_before, rows, problems, 'soak')
 
 
 load_before = benchlib.load_average()

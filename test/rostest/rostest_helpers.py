@@ -4,6 +4,7 @@ The rostest nodes of this folder import it directly; test/view,
 test/reliability and bench/ put this folder on sys.path. Every wait here ends
 in an AssertionError naming what did not happen: none falls through.
 """
+import os
 import signal
 import socket
 import subprocess
@@ -71,6 +72,18 @@ def stop(process, timeout=30):
     except subprocess.TimeoutExpired:
         process.kill()
         process.wait()
+
+
+def stop_group(process, timeout=30):
+    """stop() a process started with start_new_session=True, then kill whatever of its group is left
+    (e.g. the rosmaster of a roslaunch that had to be killed)."""
+    if process is None:
+        return
+    stop(process, timeout)
+    try:
+        os.killpg(process.pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
 
 
 def wait_for(condition, what, timeout=TIMEOUT, step=0.05):

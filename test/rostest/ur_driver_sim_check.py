@@ -13,12 +13,13 @@ import unittest
 import actionlib
 import numpy as np
 import rospy
+import rosservice
 import rostest
 import tf2_ros
 from cartesian_control_msgs.msg import (CartesianTrajectoryPoint, FollowCartesianTrajectoryAction,
                                         FollowCartesianTrajectoryGoal, FollowCartesianTrajectoryResult)
 from control_msgs.msg import (FollowJointTrajectoryAction, FollowJointTrajectoryGoal,
-                              FollowJointTrajectoryResult, JointTrajectoryControllerState)
+                              FollowJointTrajectoryResult, JointTolerance, JointTrajectoryControllerState)
 from controller_manager_msgs.srv import ListControllers, SwitchController, SwitchControllerRequest
 from geometry_msgs.msg import Twist, WrenchStamped
 from sensor_msgs.msg import JointState
@@ -50,6 +51,8 @@ COMMANDING = ['scaled_pos_joint_traj_controller', 'pos_joint_traj_controller', '
               'joint_based_cartesian_traj_controller']
 # The default constraints' goal tolerance (config/<ur_type>_controllers.yaml: goal 0.1 rad).
 GOAL_TOLERANCE = 0.1
+# Universal Robots' CB3 arms; every other model runs the e-Series software (PolyScope 5).
+CB3_MODELS = ('ur3', 'ur5', 'ur10')
 HW = '/ur_hardware_interface/'
 
 
@@ -84,7 +87,8 @@ class UrDriver(object):
                         load_program=(HW + 'dashboard/load_program', Load),
                         raw_request=(HW + 'dashboard/raw_request', RawRequest),
                         pause=(HW + 'dashboard/pause', Trigger),
-                        version=(HW + 'get_robot_software_version', GetRobotSoftwareVersion))
+                        version=(HW + 'get_robot_software_version', GetRobotSoftwareVersion),
+                        zero_ftsensor=(HW + 'zero_ftsensor', Trigger))
         for key, (name, kind) in services.items():
             rospy.wait_for_service(name, TIMEOUT)
             setattr(self, key, rospy.ServiceProxy(name, kind))
@@ -199,6 +203,27 @@ class JointTrajectoryTest(DriverTestBase):
         state, result = self.run_goal(joint_goal(names, [(2.0, HOME)]))
         self.assertEqual(result.error_code, FollowJointTrajectoryResult.INVALID_JOINTS)
         self.assertEqual(state, actionlib.GoalStatus.REJECTED)
+
+    def test_an_extra_unknown_joint_beside_the_six_is_invalid_joints(self):
+        state, result = self.run_goal(joint_goal(JOINTS + ['wrist_4_joint'], [(2.0, HOME + [0.0])]))
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.INVALID_JOINTS)
+        self.assertEqual(state, actionlib.GoalStatus.REJECTED)
+
+    def test_a_goal_ending_at_rest_off_its_target_violates_the_goal_tolerance(self):
+        # controllers.md: the unscaled controllers do not respect a paused program. Here the
+        # trajectory runs on while the paused robot stands still; without a path tolerance the
+        # goal ends with the arm at rest, far from the last point.
+        self.move_to(HOME)
+        self.driver.only('pos_joint_traj_controller')
+        self.assertTrue(self.driver.pause().success)
+        time.sleep(0.2)
+        held, _ = arm_positions(self.prefix)
+        goal = joint_goal(JOINTS, [(0.5, AWAY)])
+        goal.path_tolerance = [JointTolerance(name=self.prefix + j, position=-1.0) for j in JOINTS]
+        state, result = self.run_goal(goal, 'pos_joint_traj_controller')
+        self.assertEqual(result.error_code, FollowJointTrajectoryResult.GOAL_TOLERANCE_VIOLATED, result.error_string)
+        self.assertEqual(state, actionlib.GoalStatus.ABORTED)
+        self.assert_at(held, 1e-9)
 
     def test_bad_trajectories_are_invalid_goal(self):
         beyond = list(HOME)
@@ -367,6 +392,41 @@ class RobotTest(DriverTestBase):
         self.assertFalse(self.driver.set_io(SetIORequest(fun=SetIORequest.FUN_SET_DIGITAL_OUT, pin=40,
                                                          state=1.0)).success)
 
+    def test_script_outputs_show_on_io_states_by_their_pin_numbers(self):
+        rostest_helpers.wait_for_subscribers(self.driver.script)
+
+        def outputs_on():
+            msg = rospy.wait_for_message(HW + 'io_states', IOStates, TIMEOUT)
+            return [d.pin for d in msg.digital_out_states if d.state]
+        for on, expected in ((True, [10, 17]), (False, [])):
+            # A secondary program runs beside External Control. io_states numbers the
+            # outputs 0-7 standard, 8-15 configurable, 16-17 tool.
+            self.driver.script.publish(String(data='sec io():\n  set_configurable_digital_out(2, %s)\n'
+                                                   '  set_tool_digital_out(1, %s)\nend' % (on, on)))
+            wait_for(lambda: outputs_on() == expected, lambda: 'digital outputs %s on (are: %s)' % (
+                expected, outputs_on()))
+        self.assertTrue(rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data)
+
+    def test_movej_without_a_and_v_takes_the_manuals_default_profile(self):
+        # URScript manual: movej(q, a=1.4, v=1.05, ...). 1 rad on the leading joint is more than
+        # the ramps' v^2/a: accelerate, cruise at v, decelerate, 1/v + v/a = 1.70 s in all.
+        self.move_to(HOME)
+        time.sleep(0.3)  # the joints settle (servoj's lookahead time)
+        target = list(HOME)
+        target[0] += 1.0
+        recorder = rostest_helpers.Recorder('joint_states', JointState)
+        rostest_helpers.wait_for_subscribers(self.driver.script)
+        self.driver.script.publish(String(data='movej([%s])' % ', '.join('%r' % v for v in target)))
+        wait_for(lambda: np.allclose(arm_positions(self.prefix)[0], target, atol=1e-6), 'movej reaches its target')
+        pan = self.prefix + 'shoulder_pan_joint'
+        samples = [(m.header.stamp.to_sec(), m.position[m.name.index(pan)]) for m in recorder.since(0.0)
+                   if pan in m.name]
+        started = next(t for t, p in samples if abs(p - HOME[0]) > 1e-9)
+        arrived = next(t for t, p in samples if abs(p - target[0]) < 1e-9)
+        # The robot's clock runs with the node's: a late cycle can only make the motion longer.
+        self.assertGreater(arrived - started, 1.0 / 1.05 + 1.05 / 1.4 - 0.05)
+        self.assertLess(arrived - started, 1.0 / 1.05 + 1.05 / 1.4 + 0.5)
+
     def test_movej_through_script_command_then_resend_robot_program(self):
         self.move_to(HOME)
         rostest_helpers.wait_for_subscribers(self.driver.script)
@@ -435,13 +495,19 @@ class RobotTest(DriverTestBase):
         rostest_helpers.wait_for_subscribers(self.driver.twist)
         twist = Twist()
         twist.linear.z = 0.05
+        twist.angular.z = 0.2
         # The distance is the speed times how long the twist was held, as this test measured it
         # (its 50 Hz loop may run late on a loaded machine: the robot is judged, not the loop).
         held = hold_command(self.driver.twist, twist, Twist(), 1.0)
         time.sleep(0.3)
-        moved = self.tool()[:3, 3] - start[:3, 3]
+        end = self.tool()
+        moved = end[:3, 3] - start[:3, 3]
         self.assertAlmostEqual(moved[2], 0.05 * held, delta=0.006)
         self.assertLess(np.linalg.norm(moved[:2]), 0.005)
+        # speedl turns the tool about the base's z axis through the tool's own origin.
+        turn = end[:3, :3].dot(start[:3, :3].T)
+        self.assertAlmostEqual(math.atan2(turn[1, 0], turn[0, 0]), 0.2 * held, delta=0.03)
+        np.testing.assert_allclose(turn[:, 2], [0.0, 0.0, 1.0], atol=1e-3)
         self.driver.only('joint_group_vel_controller')
         before, _ = arm_positions(self.prefix)
         rostest_helpers.wait_for_subscribers(self.driver.velocity)
@@ -460,6 +526,20 @@ def hold_command(publisher, command, release, seconds):
         time.sleep(0.02)
     publisher.publish(release)
     return time.monotonic() - start
+
+
+class GenerationTest(DriverTestBase):
+    """What depends on the controller generation of ~ur_type: CB3 or e-Series software."""
+
+    def test_software_version_and_zero_ftsensor_follow_the_generation(self):
+        cb3 = rospy.get_param('~ur_type') in CB3_MODELS
+        version = self.driver.version()
+        self.assertEqual(version.major < 5, cb3, version)
+        response = self.driver.zero_ftsensor()
+        # ur_robot_driver: "only available for e-Series robots (Major version >= 5)".
+        self.assertEqual(response.success, not cb3, response.message)
+        remote = HW + 'dashboard/is_in_remote_control' in rosservice.get_service_list()
+        self.assertEqual(remote, not cb3)  # ROS_INTERFACE.md: "only available on e-Series models"
 
 
 class ModelAlongTrajectoryTest(DriverTestBase):
@@ -529,12 +609,16 @@ class ModelAlongTrajectoryTest(DriverTestBase):
         self.assertGreater(np.linalg.norm(readings[0] - readings[1]), 1.0)
 
 
-class FullSuite(JointTrajectoryTest, RobotTest, ModelAlongTrajectoryTest):
+class FullSuite(JointTrajectoryTest, RobotTest, GenerationTest, ModelAlongTrajectoryTest):
     """Every part of the interface (rostest.rosrun takes one TestCase class)."""
+
+
+class TrajectorySuite(JointTrajectoryTest, GenerationTest):
+    """The joint trajectory tests, and the generation's."""
 
 
 if __name__ == '__main__':
     rospy.init_node('ur_driver_sim_check')
     suite = rospy.get_param('~suite', 'full')
     rostest.rosrun('ur3_ft_gripper_description', 'ur_driver_sim_' + suite,
-                   JointTrajectoryTest if suite == 'trajectories' else FullSuite)
+                   TrajectorySuite if suite == 'trajectories' else FullSuite)

@@ -8,6 +8,7 @@ import rospkg
 
 from ur3_ft_gripper_description.devices.ur_arm import controller_manager as cm
 from ur3_ft_gripper_description.devices.ur_arm import robot_state as rs
+from ur3_ft_gripper_description.devices.ur_arm import software
 from ur3_ft_gripper_description.devices.ur_arm.trajectory import GoalError, Point, Spline, Tolerances, stop_spline
 from ur3_ft_gripper_description.devices.ur_arm.trajectory_controller import TrajectoryController
 
@@ -288,13 +289,17 @@ def test_controller_the_simulation_cannot_run_is_one_line():
 
 # -- robot modes, program, dashboard -------------------------------------------------
 
+def new_robot(ur_type='ur5e', **kwargs):
+    return rs.RobotState(software.for_model(ur_type), **kwargs)
+
+
 def settle(robot, seconds=5.0):
     for _ in range(int(seconds / 0.05)):
         robot.step(0.05)
 
 
 def test_power_on_brake_release_play():
-    robot = rs.RobotState(robot_mode=rs.POWER_OFF, program_running=False)
+    robot = new_robot(robot_mode=rs.POWER_OFF, program_running=False)
     assert robot.speed_scaling() == 0.0
     assert robot.dashboard('play') == 'Failed to execute: play'
     assert robot.dashboard('power on') == 'Powering on'
@@ -310,7 +315,7 @@ def test_power_on_brake_release_play():
 
 
 def test_slider_and_io():
-    robot = rs.RobotState()
+    robot = new_robot()
     assert robot.set_speed_slider(0.3)[0] and robot.speed_scaling() == 0.3
     assert not robot.set_speed_slider(1.5)[0] and not robot.set_speed_slider(float('nan'))[0]
     assert robot.set_io(1, 2, 1.0)[0] and robot.digital_out[2]
@@ -322,7 +327,7 @@ def test_slider_and_io():
 
 
 def test_script_and_resend_in_headless_mode():
-    robot = rs.RobotState(headless=True)
+    robot = new_robot(headless=True)
     assert robot.program_running
     robot.script_started(secondary=True)
     assert robot.program_running
@@ -335,7 +340,7 @@ def test_script_and_resend_in_headless_mode():
 
 def test_resend_without_headless_mode():
     # The simulated controller has no teach pendant: resend starts External Control in either mode.
-    robot = rs.RobotState(headless=False)
+    robot = new_robot(headless=False)
     robot.script_started(secondary=False)
     assert not robot.program_running
     assert robot.resend_robot_program() == (True, 'Successfully resent robot program') and robot.program_running
@@ -344,11 +349,11 @@ def test_resend_without_headless_mode():
 
 
 def test_dashboard_answers():
-    robot = rs.RobotState()
+    robot = new_robot()
     assert robot.dashboard('robotmode') == 'Robotmode: RUNNING'
     assert robot.dashboard('load nothing.urp') == 'File not found: nothing.urp'
     assert robot.dashboard('load external_control.urp') == 'Loading program: external_control.urp'
-    assert robot.dashboard('addToLog hello') == 'Added log message' and robot.log == ['hello']
+    assert robot.dashboard('addToLog hello') == 'Added log message' and list(robot.log) == ['hello']
     assert robot.dashboard('frobnicate') == "could not understand: 'frobnicate'"
 
 
@@ -512,7 +517,7 @@ def settings_params(configured_model, **changes):
 def test_settings_from_the_driver_configuration(configured_model):
     from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
     settings = read_settings(settings_params(configured_model))
-    assert settings.loop_hz == 500 and settings.e_series and settings.joints == JOINTS
+    assert settings.loop_hz == 500 and settings.software.e_series and settings.joints == JOINTS
     assert settings.robot.program_running
 
 
@@ -537,7 +542,7 @@ def test_bad_settings_are_one_line(configured_model, changes, words):
 
 
 def test_play_resumes_a_paused_headless_program():
-    robot = rs.RobotState(headless=True)
+    robot = new_robot(headless=True)
     assert robot.dashboard('pause') == 'Pausing program' and robot.speed_scaling() == 0.0
     assert robot.dashboard('play') == 'Starting program' and robot.speed_scaling() == 1.0
     robot.dashboard('stop')

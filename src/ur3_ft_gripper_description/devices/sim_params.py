@@ -18,8 +18,12 @@ class ParamError(ValueError):
     """A private parameter has a value the node cannot use."""
 
 
+def package_path():
+    return rospkg.RosPack().get_path(PACKAGE)
+
+
 def default_devices_file():
-    return os.path.join(rospkg.RosPack().get_path(PACKAGE), 'config', 'sim_devices.yaml')
+    return os.path.join(package_path(), 'config', 'sim_devices.yaml')
 
 
 def number(get_param, name, default, minimum=None, strictly_above=None):

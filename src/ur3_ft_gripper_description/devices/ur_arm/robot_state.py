@@ -11,17 +11,58 @@ is RUNNING and either "play" started a loaded program that holds it, or
 headless mode sent it (resend_robot_program). Powering off, "stop", a
 script sent to script_command, hand_back_control, all end it.
 
+A protective stop (reported by the joints, e.g. a collision in a physics
+engine) sets the safety mode PROTECTIVE_STOP and pauses the program, as on
+the robot; ur_robot_driver's features.md: "continue trajectories after
+protective stop: yes", so a paused External Control program resumes with
+"play" once "unlock protective stop" has cleared the stop, which the
+Dashboard Server refuses in the first 5 s.
+
 The dashboard answers are the UR dashboard server's (Universal Robots'
 "Dashboard server" manual, e-Series/CB3): the driver's Trigger services
 succeed when the answer matches what it expects.
 """
 
+import collections
+import re
+
 
 # Robot mode names in ur_dashboard_msgs/RobotMode order of start-up.
 POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING = 'POWER_OFF', 'BOOTING', 'POWER_ON', 'IDLE', 'RUNNING'
-SAFETY_NORMAL = 'NORMAL'
+MODE_ORDER = (POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING)
+SAFETY_NORMAL, PROTECTIVE_STOP = 'NORMAL', 'PROTECTIVE_STOP'
 SELECTABLE_MODES = (POWER_OFF, IDLE, RUNNING)
 EXTERNAL_CONTROL = 'external_control.urp'
+PLAYING, PAUSED, STOPPED = 'PLAYING', 'PAUSED', 'STOPPED'
+# Dashboard Server manual, "unlock protective stop": refused until 5 s after the stop.
+UNLOCK_DELAY = 5.0
+UNLOCK_TOO_EARLY = ('Cannot unlock protective stop until 5s after occurrence. Always inspect cause of protective '
+                    'stop before unlocking')
+# The robot's log (textmsg, popup, addToLog, protective stops) as the simulation keeps it: the
+# latest entries only, each cut to a length. Nothing but the node's rosout reads it back, so it
+# needs only the recent history; 1000 entries of at most 1000 characters stay within ~1 MB
+# however long a program logs in a loop (the soak holds the node's growth under 5 MB).
+LOG_ENTRIES = 1000
+LOG_ENTRY_CHARACTERS = 1000
+
+# What ur_robot_driver's dashboard services send, and the answer each expects for success.
+DASHBOARD_TRIGGERS = {
+    'power_on': ('power on', r'Powering on'),
+    'power_off': ('power off', r'Powering off'),
+    'brake_release': ('brake release', r'Brake releasing'),
+    'play': ('play', r'Starting program'),
+    'pause': ('pause', r'Pausing program'),
+    'stop': ('stop', r'Stopped'),
+    'unlock_protective_stop': ('unlock protective stop', r'Protective stop releasing'),
+    'restart_safety': ('restart safety', r'Restarting safety'),
+    'close_popup': ('close popup', r'closing popup'),
+    'close_safety_popup': ('close safety popup', r'closing safety popup'),
+    'shutdown': ('shutdown', r'Shutting down'),
+    'clear_operational_mode': ('clear operational mode', r'No longer controlling the operational mode'),
+}
+# The same by the command line, for robot_state_helper's calls of those services.
+EXPECTED_ANSWER = {command: expected for command, expected in DASHBOARD_TRIGGERS.values()}
+
 
 # Digital outputs: 8 standard (0-7), 8 configurable (8-15), 2 tool (16-17); flags: none
 # reported; analog: the 2 standard inputs and 2 standard outputs, which is all the driver's
@@ -32,19 +73,27 @@ ANALOG_INPUTS = 2
 TOOL_VOLTAGES = (0, 12, 24)
 
 
-class RobotState(object):
-    """Modes, program, slider, IO, payload; `step(dt)` lets timed transitions happen."""
+def answer_matches(answer, expected):
+    return re.match(expected, answer) is not None
 
-    def __init__(self, robot_mode=RUNNING, program_running=True, headless=False, e_series=True,
+
+class RobotState(object):
+    """Modes, program, slider, IO, payload, safety; `step(dt)` lets timed transitions happen.
+
+    `software`: the model's software.ControllerSoftware (which dashboard
+    commands exist, what "PolyScope version" answers).
+    """
+
+    def __init__(self, software, robot_mode=RUNNING, program_running=True, headless=False,
                  transition_time=0.5, programs=(EXTERNAL_CONTROL,)):
+        self.software = software
         self.robot_mode = robot_mode
         self.safety_mode = SAFETY_NORMAL
         self.headless = headless
-        self.e_series = e_series
         self.transition_time = float(transition_time)
         self.programs = list(programs)
         self.loaded_program = None if headless else EXTERNAL_CONTROL
-        self.program_state = 'STOPPED'
+        self.program_state = STOPPED
         self.external_control_running = False
         self.speed_slider = 1.0
         self.digital_out = [False] * DIGITAL_PINS
@@ -53,12 +102,13 @@ class RobotState(object):
         self.analog_in = [0.0] * ANALOG_INPUTS
         self.tool_voltage = 0
         self.payload = (0.0, (0.0, 0.0, 0.0))
-        self.log = []
+        self.log = collections.deque(maxlen=LOG_ENTRIES)
         self.popup = None
         self._target = None        # robot mode a transition is heading for
         self._timer = 0.0
+        self._stopped_for = 0.0    # s since the protective stop
         if program_running and robot_mode == RUNNING:
-            self.program_state = 'PLAYING'
+            self.program_state = PLAYING
             self.external_control_running = True
 
     # -- derived ---------------------------------------------------------------
@@ -68,25 +118,33 @@ class RobotState(object):
         """robot_program_running: the External Control node runs, i.e. ROS may command."""
         return self.external_control_running and self.robot_mode == RUNNING
 
+    @property
+    def moving_allowed(self):
+        """The arm may move: running, no safety stop, a program playing (not paused)."""
+        return self.robot_mode == RUNNING and self.safety_mode == SAFETY_NORMAL and self.program_state == PLAYING
+
     def speed_scaling(self):
-        """The slider times 0 or 1 for a running program (a stopped or paused one does not move)."""
-        return self.speed_slider if self.program_running and self.program_state == 'PLAYING' else 0.0
+        """The slider while a program plays, 0 otherwise (a stopped or paused one does not move)."""
+        return self.speed_slider if self.moving_allowed else 0.0
+
+    def add_log(self, text):
+        self.log.append(str(text)[:LOG_ENTRY_CHARACTERS])
 
     # -- time ------------------------------------------------------------------
 
     def step(self, dt):
-        """Advance a pending power-on / brake-release transition by dt seconds."""
+        """Advance a pending power-on / brake-release transition, and a protective stop's clock, by dt s."""
+        if self.safety_mode == PROTECTIVE_STOP:
+            self._stopped_for += dt
         if self._target is None:
             return
         self._timer += dt
         if self._timer < self.transition_time:
             return
         self._timer = 0.0
-        order = [POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING]
-        here = order.index(self.robot_mode)
-        there = order.index(self._target)
-        if here < there:
-            self.robot_mode = order[here + 1]
+        here = MODE_ORDER.index(self.robot_mode)
+        if here < MODE_ORDER.index(self._target):
+            self.robot_mode = MODE_ORDER[here + 1]
         if self.robot_mode == self._target:
             self._target = None
 
@@ -97,7 +155,19 @@ class RobotState(object):
 
     def _end_program(self):
         self.external_control_running = False
-        self.program_state = 'STOPPED'
+        self.program_state = STOPPED
+
+    # -- safety -------------------------------------------------------------------
+
+    def protective_stop(self, reason):
+        """The robot stopped itself (the joints said why): safety mode PROTECTIVE_STOP, the program paused."""
+        if self.safety_mode == PROTECTIVE_STOP:
+            return
+        self.safety_mode = PROTECTIVE_STOP
+        self._stopped_for = 0.0
+        if self.program_state == PLAYING:
+            self.program_state = PAUSED
+        self.add_log('Protective stop: %s' % reason)
 
     # -- what ROS-side services do directly -----------------------------------
 
@@ -147,7 +217,7 @@ class RobotState(object):
         if self.robot_mode != RUNNING:
             return False, 'The robot is %s: it must be RUNNING (set_mode) to run the program' % self.robot_mode
         self.external_control_running = True
-        self.program_state = 'PLAYING'
+        self.program_state = PLAYING
         return True, 'Successfully resent robot program'
 
     def hand_back_control(self):
@@ -158,9 +228,15 @@ class RobotState(object):
         return True, 'Deactivated control'
 
     def script_started(self, secondary):
-        """A URScript program arrived: a primary one replaces the running program."""
+        """A URScript program arrived: a primary one replaces the running program and plays."""
         if not secondary:
             self._end_program()
+            self.program_state = PLAYING
+
+    def script_finished(self):
+        """A primary script program ran to its end (the External Control program does not end so)."""
+        if not self.external_control_running:
+            self.program_state = STOPPED
 
     # -- the dashboard server ----------------------------------------------------
 
@@ -180,28 +256,31 @@ class RobotState(object):
             self._head_for(RUNNING)
             return 'Brake releasing'
         if key == 'play':
-            if self.robot_mode == RUNNING and self.program_state == 'PAUSED':
-                self.program_state = 'PLAYING'  # resumes the paused program, e.g. headless mode's script
+            if self.safety_mode != SAFETY_NORMAL:
+                return 'Failed to execute: play'
+            if self.robot_mode == RUNNING and self.program_state == PAUSED:
+                self.program_state = PLAYING  # resumes the paused program, e.g. headless mode's script
                 return 'Starting program'
             if self.robot_mode != RUNNING or self.loaded_program is None:
                 return 'Failed to execute: play'
-            self.program_state = 'PLAYING'
+            self.program_state = PLAYING
             self.external_control_running = self.loaded_program == EXTERNAL_CONTROL
             return 'Starting program'
         if key == 'stop':
-            if self.program_state == 'STOPPED':
+            if self.program_state == STOPPED:
                 return 'Failed to execute: stop'
             self._end_program()
             return 'Stopped'
         if key == 'pause':
-            if self.program_state != 'PLAYING':
+            if self.program_state != PLAYING:
                 return 'Failed to execute: pause'
-            self.program_state = 'PAUSED'
+            self.program_state = PAUSED
             return 'Pausing program'
         if key == 'unlock protective stop':
-            if self.safety_mode != 'PROTECTIVE_STOP':
-                return 'Protective stop releasing'
-            self.safety_mode = SAFETY_NORMAL
+            if self.safety_mode == PROTECTIVE_STOP:
+                if self._stopped_for < UNLOCK_DELAY:
+                    return UNLOCK_TOO_EARLY
+                self.safety_mode = SAFETY_NORMAL
             return 'Protective stop releasing'
         if key == 'restart safety':
             self.safety_mode = SAFETY_NORMAL
@@ -218,7 +297,7 @@ class RobotState(object):
         if key == 'safetymode':
             return 'Safetymode: %s' % self.safety_mode
         if key == 'running':
-            return 'Program running: %s' % ('true' if self.program_state == 'PLAYING' else 'false')
+            return 'Program running: %s' % ('true' if self.program_state == PLAYING else 'false')
         if key == 'programstate':
             return '%s %s' % (self.program_state, self.loaded_program or '<unnamed>')
         if key == 'get loaded program':
@@ -226,7 +305,8 @@ class RobotState(object):
         if key == 'isprogramsaved':
             return 'true %s' % (self.loaded_program or '<unnamed>')
         if key == 'is in remote control':
-            return 'true' if self.e_series else "could not understand: '%s'" % command
+            # An e-Series command; remote control is always on in the simulation.
+            return 'true' if self.software.e_series else "could not understand: '%s'" % command
         if key == 'clear operational mode':
             return "No longer controlling the operational mode. Current operational mode: 'AUTOMATIC'."
         if key == 'quit':
@@ -235,7 +315,7 @@ class RobotState(object):
             self.power_off_quietly()
             return 'Shutting down'
         if key == 'polyscopeversion':
-            return 'URSoftware %s' % ('5.12.0' if self.e_series else '3.15.7')
+            return 'URSoftware %s' % self.software.version_text
         if words[:2] == ['load', 'installation']:
             name = command.split(None, 2)[2] if len(words) > 2 else ''
             return 'Loading installation: %s' % name if name else 'File not found: '
@@ -250,7 +330,7 @@ class RobotState(object):
             message = command[len('addToLog'):].strip()
             if not message:
                 return 'No log message to add'
-            self.log.append(message)
+            self.add_log(message)
             return 'Added log message'
         if words[:1] == ['popup']:
             self.popup = command[len('popup'):].strip()
@@ -263,29 +343,32 @@ class RobotState(object):
         self.robot_mode = POWER_OFF
 
 
-def plan_set_mode(robot_mode, target, stop_program):
+def plan_set_mode(robot_mode, target, stop_program, safety_mode=SAFETY_NORMAL):
     """The dashboard commands robot_state_helper sends to reach `target`, each with the mode it then waits for.
 
     Returns a list of (command, robot mode to wait for or None); raises
-    ValueError for a mode that cannot be selected.
+    ValueError for a mode that cannot be selected. As ur_robot_driver's
+    robot_state_helper: nothing to do (not even stopping the program) when
+    the robot is in the target mode without a safety stop; a lower mode goes
+    through power off; a protective stop is unlocked first on the way up.
     """
     if target not in SELECTABLE_MODES:
         raise ValueError('Requested target mode %s which cannot be explicitly selected: use POWER_OFF, '
                          'IDLE or RUNNING' % target)
     steps = []
-    if robot_mode == target:
-        return steps  # robot_state_helper stops the program only on its way to another mode
+    if robot_mode == target and safety_mode == SAFETY_NORMAL:
+        return steps
     if stop_program:
         steps.append(('stop', None))
-    if target == POWER_OFF:
+    if MODE_ORDER.index(target) < MODE_ORDER.index(robot_mode):
         steps.append(('power off', POWER_OFF))
-    elif target == IDLE:
-        if robot_mode == RUNNING:
-            steps.append(('power off', POWER_OFF))
+        robot_mode = POWER_OFF
+    elif safety_mode == PROTECTIVE_STOP:
+        steps.append(('unlock protective stop', None))
+    if target == IDLE and robot_mode != IDLE:
         steps.append(('power on', IDLE))
-    else:
-        if robot_mode != RUNNING:
-            if robot_mode not in (IDLE,):
-                steps.append(('power on', IDLE))
-            steps.append(('brake release', RUNNING))
+    elif target == RUNNING and robot_mode != RUNNING:
+        if robot_mode != IDLE:
+            steps.append(('power on', IDLE))
+        steps.append(('brake release', RUNNING))
     return steps

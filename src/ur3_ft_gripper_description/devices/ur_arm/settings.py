@@ -12,6 +12,7 @@ import numpy as np
 from .. import sim_params
 from . import controller_manager as cm
 from . import robot_state as rs
+from . import software
 from .arm_kinematics import ArmKinematics
 
 
@@ -26,6 +27,10 @@ def read_settings(get_param):
     ur_type = get_param('~ur_type', 'ur5e')
     if not isinstance(ur_type, str) or not ur_type:
         raise sim_params.ParamError('~ur_type=%r must be a UR model name, e.g. ur5e' % (ur_type,))
+    try:
+        settings.software = software.for_model(ur_type)
+    except software.UnknownModel as exc:
+        raise sim_params.ParamError('~ur_type: %s' % exc)
     config_file = sim_params.existing_file(get_param, '~controller_config_file', None)
     try:
         config = cm.read_config(config_file)
@@ -63,10 +68,10 @@ def read_settings(get_param):
                                     'model\'s limits (rad)' % (get_param('~initial_positions', None),))
     settings.initial = initial
     settings.servo_lag = sim_params.number(get_param, '~servoj_lookahead_time', 0.03, minimum=0.0)
-    settings.e_series = ur_type.endswith('e')
     mode = get_param('~robot_mode', 'RUNNING')
     if mode not in rs.SELECTABLE_MODES:
         raise sim_params.ParamError('~robot_mode=%r: use POWER_OFF, IDLE or RUNNING' % (mode,))
-    settings.robot = rs.RobotState(robot_mode=mode, program_running=bool(get_param('~program_running', True)),
-                                   headless=bool(get_param('~headless_mode', False)), e_series=settings.e_series)
+    settings.robot = rs.RobotState(settings.software, robot_mode=mode,
+                                   program_running=bool(get_param('~program_running', True)),
+                                   headless=bool(get_param('~headless_mode', False)))
     return settings

@@ -22,9 +22,13 @@ names of the result codes are those of control_msgs/FollowJointTrajectoryResult,
 which the node maps to the message's values.
 """
 
+import collections
 import math
 
 import numpy as np
+
+# A goal's per-joint tolerance (control_msgs/JointTolerance in plain numbers).
+JointTolerance = collections.namedtuple('JointTolerance', 'name position velocity acceleration')
 
 
 class GoalError(ValueError):

@@ -7,8 +7,8 @@ that runs beside it and may not move the arm. The simulation understands:
 movej(q, a=1.4, v=1.05, t=0, r=0) with joint positions (a pose `p[...]`
 needs inverse kinematics, which the node supplies), set_standard_digital_out,
 set_configurable_digital_out, set_tool_digital_out, set_digital_out,
-set_standard_analog_out, set_analog_out, set_tool_voltage, textmsg, popup
-and sleep. Anything else is refused whole with one line, as the robot
+set_standard_analog_out, set_analog_out, set_tool_voltage, textmsg, popup,
+sleep and sync. Anything else is refused whole with one line, as the robot
 refuses a program that does not compile. Default speeds are those of the
 URScript manual's movej.
 """
@@ -78,9 +78,15 @@ def parse(script):
             kwargs = {k.arg: _value(k.value) for k in call.keywords}
         except (SyntaxError, ValueError) as exc:
             raise ScriptError('%r: %s' % (line, exc))
-        if secondary and name == 'movej':
-            raise ScriptError('%r: a secondary program (sec) cannot move the arm' % line)
-        statements.append(Statement(name, args, kwargs))
+        if secondary and name in ('movej', 'sleep'):
+            raise ScriptError('%r: a secondary program (sec) cannot move the arm or wait' % line)
+        statement = Statement(name, args, kwargs)
+        # Checked here, as the robot's compiler does, so that a bad argument stops no running program.
+        try:
+            CHECKS.get(name, lambda s: None)(statement)
+        except (TypeError, ValueError) as exc:
+            raise ScriptError('%r: %s' % (line, exc))
+        statements.append(statement)
     return secondary, statements
 
 
@@ -101,6 +107,50 @@ def movej_arguments(statement):
     if not all(math.isfinite(x) for x in numbers) or values['a'] <= 0 or values['v'] <= 0 or values['t'] < 0:
         raise ScriptError('movej(): positions finite, a > 0, v > 0, t >= 0')
     return target, float(values['a']), float(values['v']), float(values['t'])
+
+
+def sleep_seconds(statement):
+    """The seconds of a sleep(t) Statement."""
+    values = list(statement.args) + [statement.kwargs[k] for k in ('t',) if k in statement.kwargs]
+    if len(values) != 1 or set(statement.kwargs) - {'t'}:
+        raise ScriptError('sleep() takes one argument, the time in seconds')
+    try:
+        seconds = float(values[0])
+    except (TypeError, ValueError):
+        seconds = float('nan')
+    if not math.isfinite(seconds) or seconds < 0.0:
+        raise ScriptError('sleep(t): t must be a finite number of seconds >= 0')
+    return seconds
+
+
+def _check_digital_out(statement):
+    if len(statement.args) != 2 or not isinstance(statement.args[0], int):
+        raise ScriptError('%s(n, b) takes an output number and a boolean' % statement.name)
+
+
+def _check_analog_out(statement):
+    if len(statement.args) != 2 or not isinstance(statement.args[0], int) or \
+            not isinstance(statement.args[1], (int, float)):
+        raise ScriptError('%s(n, f) takes an output number and a fraction of its range' % statement.name)
+
+
+def _check_tool_voltage(statement):
+    if len(statement.args) != 1 or not isinstance(statement.args[0], int):
+        raise ScriptError('set_tool_voltage(voltage) takes 0, 12 or 24')
+
+
+CHECKS = {'movej': movej_arguments, 'sleep': sleep_seconds,
+          'set_standard_digital_out': _check_digital_out, 'set_digital_out': _check_digital_out,
+          'set_configurable_digital_out': _check_digital_out, 'set_tool_digital_out': _check_digital_out,
+          'set_standard_analog_out': _check_analog_out, 'set_analog_out': _check_analog_out,
+          'set_tool_voltage': _check_tool_voltage}
+
+
+class Wait(object):
+    """sleep(t): the program waits t seconds; the arm holds."""
+
+    def __init__(self, seconds):
+        self.total_time = float(seconds)
 
 
 class JointMove(object):
