@@ -1,12 +1,20 @@
 """The private link between the physics cell and the FT 300 and 2F-140 nodes (no ROS).
 
-The cell lives in the arm's process, which steps it at the controller's
-rate; the simulated FT 300 (robotiq_ft_sensor) and 2F-140 (robotiq2FGripper)
-keep their own processes and node names, and reach the cell through a local
-socket, never through a ROS topic of this package's invention. The socket is
-the standard library's ``multiprocessing.connection`` over AF_UNIX, in a
-folder only its user can enter, with an optional shared key (HMAC
-challenge, ``authkey``).
+The cell lives in the arm's process (node ``ur_hardware_interface``), which
+steps it at the controller's rate; the simulated FT 300 (robotiq_ft_sensor)
+and 2F-140 (robotiq2FGripper) keep their own processes and node names, and
+reach the cell through a local socket, never through a ROS topic of this
+package's invention. The socket is the standard library's
+``multiprocessing.connection`` over AF_UNIX, in a folder only its user can
+enter (its messages are pickles: the folder's permissions keep other users
+out), with an optional shared key (HMAC challenge, ``authkey``).
+
+Where the socket is (``cell_address``): a file in ``$ROS_HOME/ur3_ft_gripper_cell/``
+(``~/.ros`` by default) named by a hash of the ROS master's URI and the
+resolved name of the arm's node. The arm takes its own name; a device node
+resolves ``ur_hardware_interface`` in its own namespace, where the launch
+files start the three side by side. So robots in different namespaces, or on
+different masters, each have their own cell, and no parameter is needed.
 
 Protocol: request and reply are tuples, one reply per request, in order.
 
@@ -19,6 +27,14 @@ Protocol: request and reply are tuples, one reply per request, in order.
     ('finger', opening, speed, force) -> ('finger', time, state)
                                        command the fingers (m, m/s, N), then their state
     ('finger',)                     -> ('finger', time, state)     the state alone
+    ('truth',)                      -> ('truth', time, {'contact_force': (fx, fy, fz),
+                                        'objects': {name: ((x, y, z), (qw, qx, qy, qz))},
+                                        'gripper_base': ((x, y, z), 3x3 rows) or None,
+                                        'arm_position': (rad, ...), 'finger': state or None})
+                                       MuJoCo's own figures, for tests and benchmarks to judge
+                                       the interfaces by: the world's net contact force on the
+                                       robot (N, world frame), the objects' poses and the 2F-140's
+                                       base pose (world frame)
     anything else, or a failure     -> ('error', 'one line')
 
 `time` is the cell's simulated time (s); `state` is the cell's FingerState as a dict
@@ -26,12 +42,25 @@ Protocol: request and reply are tuples, one reply per request, in order.
 says hello first; a server of another VERSION answers ('error', ...).
 """
 
+import hashlib
 import os
 import threading
 from multiprocessing import AuthenticationError
 from multiprocessing.connection import Client, Listener
 
 VERSION = 1
+# ur_robot_driver's node, which holds the cell with physics.
+ARM_NODE = 'ur_hardware_interface'
+FOLDER = 'ur3_ft_gripper_cell'
+
+
+def cell_address(master_uri, arm_node, ros_home=None):
+    """The socket of the cell that the arm node `arm_node` (resolved name) serves on the master at `master_uri`."""
+    if ros_home is None:
+        import rospkg
+        ros_home = rospkg.get_ros_home()
+    key = hashlib.sha1(('%s %s' % (master_uri, arm_node)).encode('utf-8')).hexdigest()[:16]
+    return os.path.join(ros_home, FOLDER, key + '.sock')
 
 
 class LinkError(RuntimeError):
@@ -49,6 +78,7 @@ class CellServer(object):
         self.lock = lock or threading.RLock()
         folder = os.path.dirname(os.path.abspath(path))
         os.makedirs(folder, mode=0o700, exist_ok=True)
+        os.chmod(folder, 0o700)  # made earlier with other permissions: only this user may connect
         if os.path.exists(path):
             os.unlink(path)  # left by a process that died; a live server would still hold it open
         self._listener = Listener(path, family='AF_UNIX', authkey=authkey)
@@ -107,7 +137,22 @@ class CellServer(object):
                 if arguments:
                     cell.command_finger(*(float(v) for v in arguments))
                 return ('finger', cell.time, dict(vars(cell.finger())))
-        return ('error', 'unknown request %r: use hello, wrench or finger' % (request,))
+            if name == 'truth' and not arguments:
+                return ('truth', cell.time, _truth(cell))
+        return ('error', 'unknown request %r: use hello, wrench, finger or truth' % (request,))
+
+
+def _truth(cell):
+    def floats(values):
+        return tuple(float(v) for v in values)
+    base = None
+    if cell.gripper is not None:
+        position, rotation = cell.body_pose(cell.gripper_base)
+        base = (floats(position), tuple(floats(row) for row in rotation))
+    return dict(contact_force=floats(cell.contact_force()),
+                objects={name: tuple(floats(v) for v in cell.object_pose(name)) for name in cell.objects},
+                gripper_base=base, arm_position=floats(cell.arm_position),
+                finger=dict(vars(cell.finger())) if cell.gripper is not None else None)
 
 
 class CellClient(object):
@@ -141,6 +186,10 @@ class CellClient(object):
         """(time, state dict); with opening, speed and force, the fingers are commanded first."""
         request = ('finger',) if opening is None else ('finger', opening, speed, force)
         return self._ask(*request)[1:]
+
+    def truth(self):
+        """(time, dict) of MuJoCo's own figures (see the protocol)."""
+        return self._ask('truth')[1:]
 
     def close(self):
         self._connection.close()
