@@ -45,6 +45,7 @@ says hello first; a server of another VERSION answers ('error', ...).
 import hashlib
 import os
 import threading
+import time
 from multiprocessing import AuthenticationError
 from multiprocessing.connection import Client, Listener
 
@@ -61,6 +62,38 @@ def cell_address(master_uri, arm_node, ros_home=None):
         ros_home = rospkg.get_ros_home()
     key = hashlib.sha1(('%s %s' % (master_uri, arm_node)).encode('utf-8')).hexdigest()[:16]
     return os.path.join(ros_home, FOLDER, key + '.sock')
+
+
+# A device node waiting for the cell says so after this long (s): the arm's node builds the cell first.
+QUIET_WAIT = 5.0
+
+
+def wait_for_cell(rospy, who, poll=0.2):
+    """A device node's CellClient of the cell of ur_hardware_interface in its namespace, once it serves.
+
+    Warns once if it takes longer than QUIET_WAIT; None if the node shuts down meanwhile.
+    """
+    import rosgraph
+    arm = rospy.resolve_name(ARM_NODE)
+    address = cell_address(rosgraph.get_master_uri(), arm)
+    start, said = time.monotonic(), False
+    while not rospy.is_shutdown():
+        try:
+            return CellClient(address)
+        except LinkError as exc:
+            if not said and time.monotonic() - start > QUIET_WAIT:
+                said = True
+                rospy.logwarn('%s: waiting for the physics cell of %s (%s); it serves once the arm runs with '
+                              'physics (sim_arm.launch physics:=true)' % (who, arm, exc))
+        time.sleep(poll)
+    return None
+
+
+def lost_cell(rospy, who, error):
+    """A device node lost its cell: one fatal line, and the node shuts down (respawn starts it again)."""
+    rospy.logfatal('%s: %s: exiting (launch files start it again with respawn="true")' % (who, error))
+    rospy.signal_shutdown('the physics cell is gone')
+    return error
 
 
 class LinkError(RuntimeError):

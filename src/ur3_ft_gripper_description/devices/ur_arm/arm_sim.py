@@ -392,7 +392,7 @@ class PhysicsCell(object):
         self.meter.add(wall, self.cell.time)
         self.cycles += 1
         warning = self.meter.slow_warning()
-        if warning:
+        if warning and not self.rospy.core.is_shutdown_requested():  # a shutdown stalls the loop: no warning
             self.rospy.logwarn('%s: %s' % (NODE, warning))
         if wall >= self.next_report:
             self.next_report = wall + self.DIAGNOSTICS_PERIOD
