@@ -15,11 +15,10 @@ physics cell's, config/worlds/default.yaml by default).
 It moves the gripper above the object, zeroes the sensor there, goes down,
 closes on the object (gOBJ 2), lifts it back above, weighs it (the mean force
 over a second, after SET_ZERO: the object's weight alone), puts it down where
-it was and opens. Each step prints one line; the last reads
+it was and opens. Each step prints one line; the weight's reads
 "weighed <kg> kg (<N> N), the world file says <kg> kg: <+-%> %".
 """
 import argparse
-import os
 import sys
 import time
 
@@ -27,6 +26,7 @@ from transforms3d.euler import quat2euler
 
 from ur3_ft_gripper_description import clients
 from ur3_ft_gripper_description.devices import gripper_model, sim_params
+from ur3_ft_gripper_description.devices.physics.arm_cell import default_world_file
 from ur3_ft_gripper_description.devices.physics.world import load_world
 
 # Above the object's top before and after the grasp (m), and how far below it gripper_tcp goes to grasp
@@ -113,8 +113,7 @@ class PickAndWeigh(object):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--world', default=os.path.join(sim_params.package_path(), 'config', 'worlds',
-                                                        'default.yaml'), help='the world file (default: the default world)')
+    parser.add_argument('--world', default=default_world_file(), help='the world file (default: the default world)')
     parser.add_argument('--object', default='block', help="the object's name in the world file (default: block)")
     import rospy
     args = parser.parse_args(rospy.myargv(argv if argv is not None else sys.argv)[1:])

@@ -24,7 +24,6 @@ import time
 import unittest
 
 import numpy as np
-import rosgraph
 import rospkg
 import rospy
 import rostest
@@ -73,7 +72,7 @@ class PhysicsCellTest(unittest.TestCase):
     @staticmethod
     def _connect():
         try:
-            return link.CellClient(link.cell_address(rosgraph.get_master_uri(), '/' + link.ARM_NODE))
+            return link.CellClient(link.node_cell_address(rospy)[0])
         except link.LinkError:
             return None
 

@@ -214,6 +214,9 @@ class SimDevicesTest(unittest.TestCase):
         # others read it unzeroed.
         namespace, wrench, stream = ('', self.wrench, self.stream) if PHYSICS else (
             'zeroing/', self.zeroing, self.zeroing_stream)
+        if PHYSICS:
+            # The fingers open, as the model's load has them: closed, they carry their mass further out.
+            self.activate(self.command, self.gripper_status)
         acc = rospy.ServiceProxy(namespace + 'robotiq_ft_sensor_acc', sensor_accessor)
         acc.wait_for_service(TIMEOUT)
         first = self.move_to(OTHER)

@@ -10,11 +10,13 @@ enter (its messages are pickles: the folder's permissions keep other users
 out), with an optional shared key (HMAC challenge, ``authkey``).
 
 Where the socket is (``cell_address``): a file in ``$ROS_HOME/ur3_ft_gripper_cell/``
-(``~/.ros`` by default) named by a hash of the ROS master's URI and the
-resolved name of the arm's node. The arm takes its own name; a device node
-resolves ``ur_hardware_interface`` in its own namespace, where the launch
-files start the three side by side. So robots in different namespaces, or on
-different masters, each have their own cell, and no parameter is needed.
+(``~/.ros`` by default) named by a hash of the ROS master (its port and its
+process id, which its API gives every node: a URI can name one master in
+several ways, e.g. localhost or the host name) and the resolved name of the
+arm's node. The arm takes its own name; a device node resolves
+``ur_hardware_interface`` in its own namespace, where the launch files start
+the three side by side. So robots in different namespaces, or on different
+masters, each have their own cell, and no parameter is needed.
 
 Protocol: request and reply are tuples, one reply per request, in order.
 
@@ -55,17 +57,35 @@ ARM_NODE = 'ur_hardware_interface'
 FOLDER = 'ur3_ft_gripper_cell'
 
 
-def cell_address(master_uri, arm_node, ros_home=None):
-    """The socket of the cell that the arm node `arm_node` (resolved name) serves on the master at `master_uri`."""
+def cell_address(master, arm_node, ros_home=None):
+    """The socket of the cell that the arm node `arm_node` (resolved name) serves on `master`.
+
+    `master`: what identifies the master, master_identity()'s.
+    """
     if ros_home is None:
         import rospkg
         ros_home = rospkg.get_ros_home()
-    key = hashlib.sha1(('%s %s' % (master_uri, arm_node)).encode('utf-8')).hexdigest()[:16]
+    key = hashlib.sha1(('%s %s' % (master, arm_node)).encode('utf-8')).hexdigest()[:16]
     return os.path.join(ros_home, FOLDER, key + '.sock')
 
 
+def master_identity(caller):
+    """'<port> <pid>' of the ROS master this process uses (rosgraph; `caller`: a node name for its API)."""
+    import rosgraph
+    from urllib.parse import urlparse
+    master = rosgraph.Master(caller)
+    return '%s %d' % (urlparse(master.master_uri).port, master.getPid())
+
+
+def node_cell_address(rospy):
+    """(address, resolved name) of the cell of ur_hardware_interface in this node's namespace (the arm's own
+    too: a node's relative names resolve in its namespace)."""
+    arm = rospy.resolve_name(ARM_NODE)
+    return cell_address(master_identity(rospy.get_name()), arm), arm
+
+
 # A device node waiting for the cell says so after this long (s): the arm's node builds the cell first.
-QUIET_WAIT = 5.0
+QUIET_WAIT = 20.0
 
 
 def wait_for_cell(rospy, who, poll=0.2):
@@ -73,9 +93,7 @@ def wait_for_cell(rospy, who, poll=0.2):
 
     Warns once if it takes longer than QUIET_WAIT; None if the node shuts down meanwhile.
     """
-    import rosgraph
-    arm = rospy.resolve_name(ARM_NODE)
-    address = cell_address(rosgraph.get_master_uri(), arm)
+    address, arm = node_cell_address(rospy)
     start, said = time.monotonic(), False
     while not rospy.is_shutdown():
         try:

@@ -367,7 +367,6 @@ class PhysicsCell(object):
     DIAGNOSTICS_PERIOD = 1.0  # s
 
     def __init__(self, rospy, get_param, settings, lock):
-        import rosgraph
         from diagnostic_msgs.msg import DiagnosticArray
         from ..physics.arm_cell import cell_for_arm
         from ..physics.joint_motion import PhysicsJointMotion
@@ -377,7 +376,7 @@ class PhysicsCell(object):
         self.world = self.cell.world.path
         self.motion = PhysicsJointMotion.from_settings(self.cell, settings)
         self.meter = RealTimeMeter()
-        self.address = link.cell_address(rosgraph.get_master_uri(), rospy.get_name())
+        self.address = link.node_cell_address(rospy)[0]
         self.server = link.CellServer(self.cell, self.address, lock=lock)
         rospy.on_shutdown(self.server.close)
         self.diagnostics = rospy.Publisher('/diagnostics', DiagnosticArray, queue_size=10)
