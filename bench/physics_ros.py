@@ -13,10 +13,7 @@ scaled_pos_joint_traj_controller back and forth and the gripper closes and opens
 - CPU of the arm's process (the cell steps there), and of the FT 300's and the gripper's nodes.
 Figures, not pass/fail: exit status 0 when every measurement ran.
 """
-import argparse
-import json
 import os
-import subprocess
 import sys
 import threading
 import time
@@ -28,9 +25,6 @@ HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
 AWAY = [0.5, -1.4, 1.4, -1.5708, -1.5708, 0.5]
 NODES = ('/ur_hardware_interface', '/robotiq_ft_sensor', '/robotiq2FGripper')
 
-
-def say(text):
-    print('[physics_ros bench] %s' % text, file=sys.stderr)
 
 
 class Arrivals(object):
@@ -141,42 +135,7 @@ def table(results):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--seconds', type=float, default=20.0, help='measuring window (s)')
-    parser.add_argument('--output', help='RESULTS.md to write the section "physics_ros" into')
-    parser.add_argument('--one', help=argparse.SUPPRESS)  # internal: measure one ur_type, print JSON
-    args = parser.parse_args(argv)
-    if args.one:
-        master = benchlib.use_new_master()
-        try:
-            import rospy
-            rospy.init_node('physics_ros_bench', disable_signals=True)
-            try:
-                print(json.dumps(bench(args.one, args.seconds, rospy)))
-            finally:
-                rospy.signal_shutdown('done')
-        finally:
-            benchlib.stop(master)
-        return 0
-    results = []
-    for ur_type in ('ur3', 'ur5e'):
-        say('%s: %g s' % (ur_type, args.seconds))
-        child = subprocess.Popen([sys.executable, os.path.abspath(__file__), '--one', ur_type, '--seconds',
-                                  str(args.seconds)], stdout=subprocess.PIPE, universal_newlines=True,
-                                 start_new_session=True)
-        try:
-            output, _ = child.communicate()
-        finally:
-            benchlib.stop(child)
-        if child.returncode != 0:
-            say('%s: the measurement failed (exit status %d)' % (ur_type, child.returncode))
-            return 1
-        results.append(json.loads(output.strip().splitlines()[-1]))
-    text = table(results)
-    print(text)
-    if args.output:
-        benchlib.replace_section(args.output, 'physics_ros', text)
-    return 0
+    return benchlib.main_per_ur_type(argv, __doc__, __file__, 'physics_ros', bench, table, 20.0)
 
 
 if __name__ == '__main__':

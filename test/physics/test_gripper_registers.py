@@ -4,14 +4,13 @@ The cell steps in a thread as the arm's node steps it; the register machine runs
 node runs it, over PhysicsFingers and a real CellClient. Known truths: the object's width through the
 register scale of config/sim_devices.yaml, and the status codes of the manual (section 4.4).
 """
-import threading
 import time
 
 import pytest
 
-from conftest import START
-from ur3_ft_gripper_description.devices import gripper_sim, sim_params
-from ur3_ft_gripper_description.devices.physics.link import CellClient, CellServer
+from conftest import START, Served
+from ur3_ft_gripper_description.devices import gripper_sim
+from ur3_ft_gripper_description.devices.physics.link import CellClient
 
 PERIOD = 0.02  # the gripper node's 50 Hz
 
@@ -22,26 +21,14 @@ def registers(make_cell, between_pads, tmp_path):
     made = []
 
     def make(world):
-        cell = make_cell(world, START)
-        server = CellServer(cell, str(tmp_path / ('cell%d.sock' % len(made))))
-        running = [True]
-
-        def arm_loop():
-            while running[0]:
-                with server.lock:
-                    cell.step(0.008)
-                time.sleep(0.002)
-        thread = threading.Thread(target=arm_loop, daemon=True)
-        thread.start()
+        served = Served(make_cell(world, START), str(tmp_path / ('cell%d.sock' % len(made))))
+        made.append(served)
         spec = gripper_sim.spec_from_params(lambda name, default=None: default)
-        fingers = gripper_sim.PhysicsFingers(CellClient(server.path), spec)
-        made.append((running, thread, server))
+        fingers = gripper_sim.PhysicsFingers(CellClient(served.server.path), spec)
         return gripper_sim.RegisterGripper(spec, lambda text: None, fingers=fingers)
     yield make
-    for running, thread, server in made:
-        running[0] = False
-        thread.join()
-        server.close()
+    for served in made:
+        served.close()
 
 
 def command(gripper, **registers):

@@ -4,12 +4,10 @@ import os
 import stat
 import subprocess
 import sys
-import threading
-import time
 
 import pytest
 
-from conftest import START
+from conftest import START, Served
 from ur3_ft_gripper_description.devices.physics.link import CellClient, CellServer, LinkError
 
 # A node's side, in a process of its own: hello, the wrench, then close the fingers and wait.
@@ -33,20 +31,9 @@ print(json.dumps(out))
 @pytest.fixture
 def served(make_cell, between_pads, tmp_path):
     cell = make_cell(between_pads(0.05, mass=0.3), START)
-    server = CellServer(cell, str(tmp_path / 'link' / 'cell.sock'), authkey=b'key')
-    running = [True]
-
-    def arm_loop():  # what the arm's node does at its loop rate
-        while running[0]:
-            with server.lock:
-                cell.step(0.008)
-            time.sleep(0.001)
-    thread = threading.Thread(target=arm_loop, daemon=True)
-    thread.start()
-    yield cell, server
-    running[0] = False
-    thread.join()
-    server.close()
+    served = Served(cell, str(tmp_path / 'link' / 'cell.sock'), authkey=b'key')
+    yield cell, served.server
+    served.close()
 
 
 def test_a_node_process_reads_the_wrench_and_grasps_through_the_link(served):
