@@ -95,8 +95,7 @@ def bench(ur_type, seconds, rospy):
         state_sub = rospy.Subscriber('scaled_pos_joint_traj_controller/state', JointTrajectoryControllerState,
                                      on_controller_state, queue_size=1000)
         client.send_goal(goal)
-        if not client.wait_for_result(rospy.Duration(60)):
-            raise RuntimeError('the trajectory did not end within 60 s')
+        benchlib.wait_for_result(client, 60)
         state_sub.unregister()
         final = rospy.wait_for_message('joint_states', JointState, 10)
         end_error = max(abs(p - h) for p, h in zip(final.position, HOME))

@@ -77,7 +77,9 @@ class Driver(object):
                                                                time_from_start=self.rospy.Duration(seconds)))
         client = self.trajectory[controller]
         client.send_goal(goal)
-        if not client.wait_for_result(self.rospy.Duration(TIMEOUT)):
+        try:
+            benchlib.wait_for_result(client, TIMEOUT)
+        except AssertionError:
             return None
         return client.get_result().error_code
 

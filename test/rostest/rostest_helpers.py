@@ -100,6 +100,28 @@ def wait_for(condition, what, timeout=TIMEOUT, step=0.05):
         time.sleep(step)
 
 
+def wait_for_result(client, timeout=TIMEOUT):
+    """The terminal status of the goal that actionlib SimpleActionClient `client` sent last, once its
+    result has arrived (client.get_result() then has it).
+
+    Not the client's own wait_for_result: the client tracks a goal only once
+    send_goal() returns, after publishing it, so the transitions of a goal that
+    a server ends at once (set_mode on a robot already running) can arrive
+    before and be dropped ("Got a transition callback on a goal handle that
+    we're not tracking"), and wait_for_result then waits in vain. The goal
+    handle has the status and the result all the same (they come on two
+    topics: the terminal status can be there before the result).
+    """
+    from actionlib_msgs.msg import GoalStatus
+    terminal = (GoalStatus.PREEMPTED, GoalStatus.SUCCEEDED, GoalStatus.ABORTED, GoalStatus.REJECTED,
+                GoalStatus.RECALLED)
+
+    def ended():
+        state = client.get_state()
+        return state in terminal and client.get_result() is not None and state
+    return wait_for(ended, 'the result of the goal sent to %s' % client.action_client.ns, timeout)
+
+
 def wait_for_subscribers(publisher, timeout=TIMEOUT):
     """Until `publisher` has a subscriber (a message sent before that is lost)."""
     wait_for(publisher.get_num_connections, 'a subscriber of %s' % publisher.resolved_name, timeout)

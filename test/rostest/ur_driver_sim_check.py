@@ -142,7 +142,7 @@ class DriverTestBase(unittest.TestCase):
         # Every test starts from a running robot with its program running.
         goal = SetModeGoal(target_robot_mode=RobotMode(mode=RobotMode.RUNNING), play_program=True)
         self.driver.set_mode.send_goal(goal)
-        self.assertTrue(self.driver.set_mode.wait_for_result(rospy.Duration(TIMEOUT)))
+        rostest_helpers.wait_for_result(self.driver.set_mode)
         self.assertTrue(self.driver.set_mode.get_result().success, self.driver.set_mode.get_result().message)
         self.assertTrue(self.driver.slider(1.0).success)
         self.driver.only('scaled_pos_joint_traj_controller')
@@ -150,7 +150,7 @@ class DriverTestBase(unittest.TestCase):
     def run_goal(self, goal, controller='scaled_pos_joint_traj_controller', timeout=TIMEOUT):
         client = self.driver.trajectory.get(controller) or self.driver.cartesian[controller]
         client.send_goal(goal)
-        self.assertTrue(client.wait_for_result(rospy.Duration(timeout)), 'no result from %s' % controller)
+        rostest_helpers.wait_for_result(client, timeout)
         return client.get_state(), client.get_result()
 
     def move_to(self, positions, seconds=2.0, controller='scaled_pos_joint_traj_controller'):
@@ -272,11 +272,11 @@ class JointTrajectoryTest(DriverTestBase):
                                               FollowJointTrajectoryAction)
         second.wait_for_server(rospy.Duration(TIMEOUT))
         second.send_goal(joint_goal(JOINTS, [(4.0, HOME)]))
-        self.assertTrue(client.wait_for_result(rospy.Duration(TIMEOUT)))
+        rostest_helpers.wait_for_result(client)
         self.assertEqual(client.get_state(), actionlib.GoalStatus.PREEMPTED)
         time.sleep(0.5)
         second.cancel_goal()
-        self.assertTrue(second.wait_for_result(rospy.Duration(TIMEOUT)))
+        rostest_helpers.wait_for_result(second)
         self.assertEqual(second.get_state(), actionlib.GoalStatus.PREEMPTED)
         time.sleep(0.7)  # stop_trajectory_duration is 0.5 s
         before, _ = arm_positions(self.prefix)
@@ -306,7 +306,7 @@ class RobotTest(DriverTestBase):
         self.assertEqual(self.driver.play().success, False)
         goal = SetModeGoal(target_robot_mode=RobotMode(mode=RobotMode.RUNNING), play_program=True)
         self.driver.set_mode.send_goal(goal)
-        self.assertTrue(self.driver.set_mode.wait_for_result(rospy.Duration(TIMEOUT)))
+        rostest_helpers.wait_for_result(self.driver.set_mode)
         self.assertTrue(self.driver.set_mode.get_result().success)
         self.assertEqual(self.driver.get_robot_mode().robot_mode.mode, RobotMode.RUNNING)
         self.assertTrue(rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data)
@@ -366,7 +366,7 @@ class RobotTest(DriverTestBase):
         np.testing.assert_allclose(arm_positions(self.prefix)[0], held, atol=1e-6)
         self.assertEqual(client.get_state(), actionlib.GoalStatus.ACTIVE)
         self.assertTrue(self.driver.play().success)
-        self.assertTrue(client.wait_for_result(rospy.Duration(TIMEOUT)))
+        rostest_helpers.wait_for_result(client)
         self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
         self.assert_at(AWAY)
 
@@ -569,7 +569,7 @@ class ModelAlongTrajectoryTest(DriverTestBase):
         client = self.driver.trajectory['scaled_pos_joint_traj_controller']
         start = time.monotonic()
         client.send_goal(joint_goal(JOINTS, [(3.0, AWAY)]))
-        self.assertTrue(client.wait_for_result(rospy.Duration(TIMEOUT)))
+        rostest_helpers.wait_for_result(client)
         self.assertEqual(client.get_result().error_code, FollowJointTrajectoryResult.SUCCESSFUL)
         time.sleep(0.5)
         tf_sub.unregister()
