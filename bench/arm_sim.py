@@ -14,10 +14,7 @@ sim_arm.launch with the bare arm's model, then:
   far from its goal the arm ends.
 Figures, not pass/fail: exit status 0 when every measurement ran.
 """
-import argparse
-import json
 import os
-import subprocess
 import sys
 import threading
 import time
@@ -29,9 +26,6 @@ HOME = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
           'wrist_3_joint']
 
-
-def say(text):
-    print('[arm_sim bench] %s' % text, file=sys.stderr)
 
 
 def bench(ur_type, seconds, rospy):
@@ -133,45 +127,7 @@ def table(results):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
-    parser.add_argument('--seconds', type=float, default=10.0, help='measuring window for the state rate (s)')
-    parser.add_argument('--output', help='RESULTS.md to write the section "arm_sim" into')
-    parser.add_argument('--one', help=argparse.SUPPRESS)  # internal: measure one ur_type, print JSON
-    args = parser.parse_args(argv)
-    if args.one:
-        # Each ur_type in its own process on its own master: rospy connects a process to one master.
-        master = benchlib.use_new_master()
-        try:
-            import rospy
-            rospy.init_node('arm_sim_bench', disable_signals=True)
-            try:
-                print(json.dumps(bench(args.one, args.seconds, rospy)))
-            finally:
-                rospy.signal_shutdown('done')
-        finally:
-            benchlib.stop(master)
-        return 0
-    results = []
-    for ur_type in ('ur3', 'ur5e'):
-        say('%s: %g s of joint_states, then a trajectory' % (ur_type, args.seconds))
-        # Its own session, so that it ends through stop() (SIGINT), which it answers by stopping
-        # everything it started, also when this process is interrupted.
-        child = subprocess.Popen([sys.executable, os.path.abspath(__file__), '--one', ur_type,
-                                  '--seconds', str(args.seconds)], stdout=subprocess.PIPE, universal_newlines=True,
-                                 start_new_session=True)
-        try:
-            output, _ = child.communicate()
-        finally:
-            benchlib.stop(child)
-        if child.returncode != 0:
-            say('%s: the measurement failed (exit status %d)' % (ur_type, child.returncode))
-            return 1
-        results.append(json.loads(output.strip().splitlines()[-1]))
-    text = table(results)
-    print(text)
-    if args.output:
-        benchlib.replace_section(args.output, 'arm_sim', text)
-    return 0
+    return benchlib.main_per_ur_type(argv, __doc__, __file__, 'arm_sim', bench, table, 10.0)
 
 
 if __name__ == '__main__':

@@ -4,6 +4,7 @@ Everything here starts its own rosmaster on a free port, so a benchmark never
 touches a master someone else uses, and stops only the processes it started.
 """
 import datetime
+import json
 import os
 import platform
 import statistics
@@ -143,3 +144,67 @@ def report_soak(record, section, heading, setting, load_before, rows, problems, 
             heading, '', '%s, %s; load average before: %s. %s' % (now_text(), machine(), load_before, setting), '',
             table, '', 'Result: %s' % verdict]))
     return 0 if not problems else 1
+
+
+def measure_alone(node_name, measure):
+    """In a process of its own (rospy talks to one master per process): a new master, a node, then
+    measure(rospy)'s result printed as JSON; everything started is stopped."""
+    master = use_new_master()
+    try:
+        import rospy
+        rospy.init_node(node_name, disable_signals=True)
+        try:
+            print(json.dumps(measure(rospy)))
+        finally:
+            rospy.signal_shutdown('done')
+    finally:
+        stop(master)
+    return 0
+
+
+def measure_each(script, names, args, say):
+    """[the JSON `script --one NAME args...` prints last, for each NAME], or None if one failed.
+
+    Each runs in its own session, so that it ends through stop() (SIGINT), which it answers by
+    stopping everything it started, also when this process is interrupted.
+    """
+    results = []
+    for name in names:
+        child = subprocess.Popen([sys.executable, script, '--one', name] + list(args), stdout=subprocess.PIPE,
+                                 universal_newlines=True, start_new_session=True)
+        try:
+            output, _ = child.communicate()
+        finally:
+            stop(child)
+        if child.returncode != 0:
+            say('%s: the measurement failed (exit status %d)' % (name, child.returncode))
+            return None
+        results.append(json.loads(output.strip().splitlines()[-1]))
+    return results
+
+
+def main_per_ur_type(argv, doc, script, section, bench, table, seconds):
+    """A benchmark's main() that measures a ur3 (CB3, 125 Hz) and a ur5e (e-Series, 500 Hz), each in a process
+    and on a master of its own: bench(ur_type, seconds, rospy) -> a JSON-able result, table(results) -> Markdown,
+    written into `section` of --output."""
+    import argparse
+    parser = argparse.ArgumentParser(description=doc.split('\n')[0])
+    parser.add_argument('--seconds', type=float, default=seconds, help='measuring window (s, default %g)' % seconds)
+    parser.add_argument('--output', help='RESULTS.md to write the section "%s" into' % section)
+    parser.add_argument('--one', help=argparse.SUPPRESS)  # internal: measure one ur_type, print JSON
+    args = parser.parse_args(argv)
+    name = os.path.splitext(os.path.basename(script))[0]
+    if args.one:
+        return measure_alone(name + '_bench', lambda rospy: bench(args.one, args.seconds, rospy))
+
+    def say(text):
+        print('[%s bench] %s' % (name, text), file=sys.stderr)
+    say('ur3 and ur5e: %g s each' % args.seconds)
+    results = measure_each(os.path.abspath(script), ('ur3', 'ur5e'), ['--seconds', str(args.seconds)], say)
+    if results is None:
+        return 1
+    text = table(results)
+    print(text)
+    if args.output:
+        replace_section(args.output, section, text)
+    return 0

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Soak: the view launch (headless) for a long time, the simulated FT 300 at 100 Hz and
 gripper register commands at 10 Hz; checks that the nodes' resident memory does not grow
-and the wrench stream has no gap. With --what arm, the simulated arm instead (bench/soak_arm.py).
+and the wrench stream has no gap. With --what arm, the simulated arm instead (bench/soak_arm.py);
+with --what physics, the cell on physics driven by the shipped examples (bench/soak_physics.py).
 
-    python3 bench/soak.py [--what devices|arm] [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
+    python3 bench/soak.py [--what devices|arm|physics] [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
 
 Limits: resident memory of the simulated devices (robotiq_ft_sensor,
 robotiq2FGripper, gripper_joint_states) grows by at most 5 MB after the warm-up; no gap over 50 ms between consecutive wrench messages
@@ -105,13 +106,17 @@ def main(argv=None):
     parser.add_argument('--record', help='write the numbers into this RESULTS.md (soak section)')
     parser.add_argument('--max-gap-ms', type=float, default=1e3 * GAP_LIMIT_S,
                         help='largest allowed wrench gap (default: the issue\'s %g ms)' % (1e3 * GAP_LIMIT_S))
-    parser.add_argument('--what', choices=('devices', 'arm'), default='devices',
-                        help='the simulated FT 300 and gripper (default), or the simulated arm (bench/soak_arm.py)')
+    parser.add_argument('--what', choices=('devices', 'arm', 'physics'), default='devices',
+                        help='the simulated FT 300 and gripper (default), the simulated arm (bench/soak_arm.py), '
+                             'or the cell on physics (bench/soak_physics.py)')
     args = parser.parse_args(argv)
     seconds = args.seconds if args.seconds is not None else 60.0 * (args.minutes or 30.0)
     if args.what == 'arm':
         import soak_arm
         return soak_arm.run(args, seconds, 'soak arm')
+    if args.what == 'physics':
+        import soak_physics
+        return soak_physics.run(args, seconds, 'soak physics')
 
     master = benchlib.use_new_master()
     launch = None

@@ -16,9 +16,10 @@ import pytest
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices.physics import MissingMuJoCo, require_mujoco
-from ur3_ft_gripper_description.devices.physics.joint_motion import JointCommand, PhysicsJointMotion
+from ur3_ft_gripper_description.devices.physics.joint_motion import PhysicsJointMotion
 from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
 from ur3_ft_gripper_description.model import description, export, mjcf
 
 # The simulated arm's start pose (devices/ur_arm/settings.py): elbow bent, tool pointing down.
@@ -155,3 +156,28 @@ def close_on(cell, force, speed=0.1, seconds=2.0):
         if state.motion != 'moving':
             return state
     return cell.finger()
+
+
+class Served(object):
+    """`cell` served at `path` (link.CellServer), stepped by a thread as the arm's node steps it; close() ends both."""
+
+    def __init__(self, cell, path, authkey=None, period=0.008):
+        import threading
+        import time
+        from ur3_ft_gripper_description.devices.physics.link import CellServer
+        self.cell = cell
+        self.server = CellServer(cell, path, authkey=authkey)
+        self._running = True
+
+        def arm_loop():
+            while self._running:
+                with self.server.lock:
+                    cell.step(period)
+                time.sleep(0.001)
+        self._thread = threading.Thread(target=arm_loop, daemon=True)
+        self._thread.start()
+
+    def close(self):
+        self._running = False
+        self._thread.join()
+        self.server.close()

@@ -17,8 +17,8 @@ import yaml
 
 from conftest import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
 from ur3_ft_gripper_description import kinematics
-from ur3_ft_gripper_description.devices.physics.joint_motion import JointCommand
 from ur3_ft_gripper_description.devices.ur_arm import joints
+from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
 from ur3_ft_gripper_description.model import inertials
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
@@ -122,26 +122,73 @@ def test_servo_follows_streamed_positions_with_servojs_lag(make_cell):
     assert worst < 0.0005, 'the servo strayed %.4f rad from the lag law' % worst
 
 
-def test_pushing_into_the_table_ends_in_a_protective_stop_that_holds_the_arm(make_cell):
+def test_pushing_into_the_table_reports_a_protective_stop_and_the_arm_stops_pressing(make_cell):
+    """The joint-motion seam's side: the step in which the contact force passed 150 N reports it (the
+    core latches it, test below); the cell then holds the arm where it stopped, so the force drops."""
     cell = make_cell(TABLE, START)
     arm = Arm(cell)
     close_on(cell, 60.0, speed=0.25)
-    forces = []
+    forces, reasons = [], []
 
     def stopped():
         forces.append(float(np.linalg.norm(cell.contact_force())))
-        return cell.protective_stop is not None
+        reasons.append(arm.motion.protective_stop)
+        return arm.motion.protective_stop is not None
     assert arm.move_tool([0.0, 0.0, -0.12], 3.0, until=stopped), 'no protective stop'
-    assert 'exceeded the 150 N limit' in cell.protective_stop
-    assert max(forces) > 150.0
+    assert 'exceeded the 150 N limit' in reasons[-1]
+    assert max(forces) > 150.0 and not any(reasons[:-1])
     held = cell.arm_position
-    for _ in range(500):
-        arm.motion.step(JointCommand('MOVE', START + np.array([0.0, 0.3, 0.0, 0.0, 0.0, 0.0])), 0.002)
+    for _ in range(500):  # what the core commands meanwhile
+        arm.motion.step(JointCommand('HOLD', held), 0.002)
+        assert arm.motion.protective_stop is None, 'the stop is reported by the step that caused it only'
     assert np.max(np.abs(cell.arm_position - held)) < 0.002, 'the arm moved during the protective stop'
     assert np.linalg.norm(cell.contact_force()) < 150.0
-    arm.motion.clear_protective_stop()
-    assert arm.move_tool([0.0, 0.0, 0.05], 1.0) is False and cell.protective_stop is None
-    assert np.linalg.norm(cell.contact_force()) < 1.0, 'the arm did not lift off after the stop was cleared'
+    assert arm.move_tool([0.0, 0.0, 0.05], 1.0) is False
+    assert np.linalg.norm(cell.contact_force()) < 1.0, 'the arm did not lift off'
+
+
+def test_the_core_on_physics_latches_the_stop_as_the_robot_does(make_cell, robot):
+    """ArmCore over PhysicsJointMotion: twist_controller pushes the tool into the table; the robot enters
+    PROTECTIVE_STOP, pauses its program and holds, refuses to unlock for 5 s (Dashboard Server manual),
+    and moves again after 'unlock protective stop' and 'play'."""
+    from ur3_ft_gripper_description.devices.ur_arm import controller_manager as cm
+    from ur3_ft_gripper_description.devices.ur_arm import core as arm_core
+    from ur3_ft_gripper_description.devices.ur_arm import robot_state as rs
+    from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
+    from ur3_ft_gripper_description.devices.physics.joint_motion import PhysicsJointMotion
+    config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', 'ur3_controllers.yaml')
+    values = {'~ur_type': 'ur3', '~controller_config_file': config, 'robot_description': robot[1],
+              '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller'}
+    settings = read_settings(lambda name, default=None: values.get(name, default))
+    cell = make_cell(TABLE, settings.initial)
+    core = arm_core.ArmCore(settings, PhysicsJointMotion.from_settings(cell, settings))
+    dt = 1.0 / settings.loop_hz  # 125 Hz: four steps of the cell a cycle
+    assert core.switch_controllers(['twist_controller'], ['scaled_pos_joint_traj_controller'], cm.STRICT)[0]
+    core.twist_command('twist_controller', [0.0, 0.0, -0.05, 0.0, 0.0, 0.0])
+    for _ in range(int(3.0 / dt)):
+        snapshot = core.step(dt)
+        if snapshot.safety_mode == rs.PROTECTIVE_STOP:
+            break
+    assert snapshot.safety_mode == rs.PROTECTIVE_STOP, 'no protective stop'
+    assert core.robot.program_state == rs.PAUSED and snapshot.program_running
+    assert any('Protective stop' in text and '150 N' in text for _, text in core.take_messages())
+    held = cell.arm_position
+    for _ in range(int(1.0 / dt)):
+        core.step(dt)
+    assert np.max(np.abs(cell.arm_position - held)) < 0.002, 'the arm moved during the protective stop'
+    assert np.linalg.norm(cell.contact_force()) < 150.0
+    assert core.dashboard('unlock protective stop') == rs.UNLOCK_TOO_EARLY
+    for _ in range(int(4.5 / dt)):
+        core.step(dt)
+    assert core.dashboard('unlock protective stop') == 'Protective stop releasing'
+    core.twist_command('twist_controller', [0.0, 0.0, 0.05, 0.0, 0.0, 0.0])
+    assert core.dashboard('play') == 'Starting program'
+    height = cell.body_pose(cell.gripper_base)[0][2]
+    for _ in range(int(1.0 / dt)):
+        snapshot = core.step(dt)
+    assert snapshot.safety_mode == rs.SAFETY_NORMAL
+    assert cell.body_pose(cell.gripper_base)[0][2] > height + 0.03, 'the tool did not rise after play'
+    assert np.linalg.norm(cell.contact_force()) < 1.0, 'the arm did not lift off'
 
 
 def test_the_default_world_loads_with_objects_the_gripper_can_hold(make_cell):

@@ -1,13 +1,13 @@
 """The link between the cell (the arm's process) and the FT 300 and 2F-140 nodes' processes."""
 import json
+import os
+import stat
 import subprocess
 import sys
-import threading
-import time
 
 import pytest
 
-from conftest import START
+from conftest import START, Served
 from ur3_ft_gripper_description.devices.physics.link import CellClient, CellServer, LinkError
 
 # A node's side, in a process of its own: hello, the wrench, then close the fingers and wait.
@@ -31,20 +31,9 @@ print(json.dumps(out))
 @pytest.fixture
 def served(make_cell, between_pads, tmp_path):
     cell = make_cell(between_pads(0.05, mass=0.3), START)
-    server = CellServer(cell, str(tmp_path / 'link' / 'cell.sock'), authkey=b'key')
-    running = [True]
-
-    def arm_loop():  # what the arm's node does at its loop rate
-        while running[0]:
-            with server.lock:
-                cell.step(0.008)
-            time.sleep(0.001)
-    thread = threading.Thread(target=arm_loop, daemon=True)
-    thread.start()
-    yield cell, server
-    running[0] = False
-    thread.join()
-    server.close()
+    served = Served(cell, str(tmp_path / 'link' / 'cell.sock'), authkey=b'key')
+    yield cell, served.server
+    served.close()
 
 
 def test_a_node_process_reads_the_wrench_and_grasps_through_the_link(served):
@@ -80,3 +69,36 @@ def test_no_cell_is_one_line(tmp_path):
     with pytest.raises(LinkError) as raised:
         CellClient(str(tmp_path / 'nothing.sock'))
     assert 'no physics cell at' in str(raised.value) and '\n' not in str(raised.value)
+
+
+def test_the_truth_is_mujocos_own(served):
+    cell, server = served
+    client = CellClient(server.path, authkey=b'key')
+    stamp, truth = client.truth()
+    with server.lock:
+        assert truth['objects']['held'][0] == pytest.approx(tuple(cell.object_pose('held')[0]), abs=1e-3)
+        assert truth['arm_position'] == pytest.approx(tuple(cell.arm_position), abs=1e-3)
+    assert sorted(truth) == ['arm_position', 'contact_force', 'finger', 'gripper_base', 'objects']
+    assert len(truth['gripper_base'][1]) == 3 and truth['finger']['motion'] in ('moving', 'at_target')
+    client.close()
+
+
+def test_the_address_names_the_master_and_the_arm_node_and_its_folder_is_private(tmp_path):
+    from ur3_ft_gripper_description.devices.physics.link import cell_address
+    home = str(tmp_path)
+    one = cell_address('11311 4242', '/ur_hardware_interface', home)
+    assert one == cell_address('11311 4242', '/ur_hardware_interface', home)
+    others = {cell_address('11311 4242', '/left/ur_hardware_interface', home),
+              cell_address('11312 4242', '/ur_hardware_interface', home),
+              cell_address('11311 4243', '/ur_hardware_interface', home)}
+    assert one not in others and len(others) == 3
+    assert one.startswith(os.path.join(home, 'ur3_ft_gripper_cell') + os.sep) and len(one.encode()) < 108
+    os.makedirs(os.path.dirname(one), mode=0o755)
+    os.chmod(os.path.dirname(one), 0o755)  # made earlier, open to others: the server closes it
+    cell = type('NoCell', (), {})()
+    server = CellServer(cell, one)
+    try:
+        assert stat.S_IMODE(os.stat(os.path.dirname(one)).st_mode) == 0o700
+    finally:
+        server.close()
+    assert not os.path.exists(one)

@@ -142,13 +142,17 @@ def wait_for_log(rosout, node, level, text, since=0.0, timeout=TIMEOUT):
 class Recorder(object):
     """Messages of one topic with their receipt time."""
 
-    def __init__(self, topic, msg_type):
+    def __init__(self, topic, msg_type, keep=None):
+        """`keep(msg)`: record only the messages it is true for (default: all)."""
         self.items = []
         self.lock = threading.Lock()
         self.topic = topic
+        self.keep = keep
         rospy.Subscriber(topic, msg_type, self._add, queue_size=1000)
 
     def _add(self, msg):
+        if self.keep is not None and not self.keep(msg):
+            return
         with self.lock:
             self.items.append((time.monotonic(), msg))
 

@@ -61,6 +61,9 @@ NOT_RUN_HERE = [
     ('rosservice ', 'needs the running devices; test/rostest speaks the same interfaces'),
     ('rosrun robotiq_2f_gripper_control', "Robotiq's interactive tools, not built here (test/rostest/"
                                           "gripper_registers.test speaks their registers)"),
+    ('rosrun ur3_ft_gripper_description pick_and_weigh.py', 'needs the cell on physics running: '
+                                                           'test/rostest/physics_cell.test runs it'),
+    ('rosrun ur3_ft_gripper_description guarded_touch.py', 'the same: test/rostest/physics_cell.test runs it'),
 ]
 RUN_HERE = ('roslaunch ', 'rosrun ur3_ft_gripper_description export_')
 
@@ -213,3 +216,21 @@ def test_each_launch_fragment_loads(block, tmp_path):
     name = re.search(r'<param name="(\w+)"', block['text']).group(1)
     value = [v for k, v in yaml.safe_load(dump.stdout).items() if k.endswith('/' + name)]
     assert value and value[0].lstrip().startswith('<'), 'the fragment set no XML as %s' % name
+
+
+YAML = [b for b in SNIPPETS if b['lang'] == 'yaml']
+# A mesh file a world snippet names (e.g. part.stl) is stood in for by a 10 mm cube.
+CUBE_STL = 'solid cube\n%sendsolid cube\n' % ''.join(
+    'facet normal 0 0 0\nouter loop\n%sendloop\nendfacet\n' % ''.join('vertex %g %g %g\n' % v for v in face)
+    for face in [((0, 0, 0), (0.01, 0, 0), (0, 0.01, 0))])
+
+
+@pytest.mark.parametrize('block', YAML, ids=['%s:%d' % (b['file'], b['line']) for b in YAML])
+def test_each_yaml_snippet_is_a_world_file_the_physics_cell_reads(block, tmp_path):
+    from ur3_ft_gripper_description.devices.physics.world import load_world
+    for mesh in re.findall(r'mesh:\s*([\w./-]+)', block['text']):
+        (tmp_path / mesh).write_text(CUBE_STL)
+    world = tmp_path / 'world.yaml'
+    world.write_text(block['text'])
+    loaded = load_world(str(world))
+    assert loaded.objects, 'a world snippet without objects'

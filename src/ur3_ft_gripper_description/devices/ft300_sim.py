@@ -32,6 +32,14 @@ Private parameters (defaults from config/sim_devices.yaml):
 
 Until the pose is known the node waits, warns once and publishes nothing; it
 never publishes a wrench for a pose it does not know.
+
+With ``~physics`` true (sim_devices.launch physics:=true) the true wrench is
+the physics cell's instead (MuJoCo's force and torque at the sensor frame:
+the tool side's weight and inertia, contacts, whatever the fingers hold),
+read through the private link from the arm's node (physics/link.py) at the
+same rate; SET_ZERO, the noise and the stream's resolution stay as above.
+TF and ~payload_mass / ~payload_com are not used then: physics weighs what
+the gripper holds.
 """
 
 import dataclasses
@@ -120,7 +128,12 @@ def as_device_sends(values):
 
 
 class SensorModel(object):
-    """Reading = gravity wrench of the load + noise - zero offset (no ROS)."""
+    """Reading = true wrench + noise - zero offset, in the stream's resolution (no ROS).
+
+    The true wrench comes from one of two sources: the gravity of the modelled
+    load for the sensor's orientation (read_quaternion, read_gravity), or a
+    physics cell's reading (read).
+    """
 
     def __init__(self, settings, rng=None):
         self.settings = settings
@@ -142,7 +155,10 @@ class SensorModel(object):
 
     def read_gravity(self, gx, gy, gz):
         """(fx, fy, fz, tx, ty, tz), as the device sends it, for gravity along (gx, gy, gz)."""
-        true = wrench_model.gravity_wrench(gx, gy, gz, self._mass, self._com)
+        return self.read(wrench_model.gravity_wrench(gx, gy, gz, self._mass, self._com))
+
+    def read(self, true):
+        """(fx, fy, fz, tx, ty, tz), as the device sends it, for the true wrench `true` (six floats)."""
         if self._zero_requested:
             # As rq_sensor_com does: the reading before the request becomes the zero.
             # Its noise-free value is taken, what the noise averages out to.
@@ -274,6 +290,9 @@ def run(rospy):
     except sim_params.ParamError as exc:
         rospy.logfatal('ft300_sim: bad parameter %s', exc)
         return 1
+    physics = bool(rospy.get_param('~physics', False))
+    if physics and rospy.get_param('~payload_mass', 0.0):
+        rospy.logwarn('ft300_sim: ~payload_mass is not used with ~physics: the sensor weighs what the gripper holds')
     # Read as rq_sensor reads them; there is no serial device to open or retry.
     serial_id = rospy.get_param('~serial_id', '')
     rospy.get_param('~max_retries', 100)
@@ -300,6 +319,9 @@ def run(rospy):
     message.header.frame_id = settings.frame_id
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
 
+    if physics:
+        return _run_on_physics(rospy, settings, sensor, sensor_publisher, wrench_publisher, stream, message)
+
     def step():
         now = rospy.Time.now()
         try:
@@ -320,6 +342,39 @@ def run(rospy):
             wrench_publisher.publish(message)
 
     return node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=tf_buffer.clear)
+
+
+def _run_on_physics(rospy, settings, sensor, sensor_publisher, wrench_publisher, stream, message):
+    """The loop with the physics cell's wrench as the true one. Returns the exit status."""
+    from ur3_ft_gripper_description.devices.physics import link
+    client = link.wait_for_cell(rospy, 'ft300_sim')
+    if client is None:
+        return 0
+    if client.info['ft_frame'] != settings.frame_id:
+        rospy.logfatal('ft300_sim: the physics cell has %s where this sensor reads %s: give both the same '
+                       'model and ~prefix (or ~frame_id)', client.info['ft_frame'] or 'no FT 300', settings.frame_id)
+        return 1
+    rospy.loginfo('ft300_sim: reading %s from the physics cell; publishing robotiq_ft_sensor and '
+                  'robotiq_ft_wrench at %g Hz', settings.frame_id, settings.rate)
+    force_msg, torque_msg = message.wrench.force, message.wrench.torque
+    lost = []
+
+    def step():
+        try:
+            true = client.wrench()[1]
+        except link.LinkError as exc:
+            lost.append(link.lost_cell(rospy, 'ft300_sim', exc))
+            return
+        fx, fy, fz, tx, ty, tz = sensor.read(true)
+        stream.Fx, stream.Fy, stream.Fz, stream.Mx, stream.My, stream.Mz = fx, fy, fz, tx, ty, tz
+        sensor_publisher.publish(stream)
+        message.header.stamp = rospy.Time.now()
+        force_msg.x, force_msg.y, force_msg.z = fx, fy, fz
+        torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
+        wrench_publisher.publish(message)
+
+    status = node_loop.run_at_rate(rospy, settings.rate, step)
+    return 1 if lost else status
 
 
 def main():

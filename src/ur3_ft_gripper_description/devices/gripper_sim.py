@@ -18,10 +18,10 @@ Instruction Manual (section 4, "Control") describes them:
   max_speed); rGTO 0 stops the fingers where they are. gGTO echoes rGTO,
   gPR echoes rPR, gPO is the actual position, gCU a plausible current
   (moving, or holding with a force from rFR; see config/sim_devices.yaml).
-* gOBJ: 0 while moving, 2 when closing stopped on the simulated object
-  (``~object_width``, m between the pads; unset: none), 3 at the requested
-  position. The manual says to ignore gOBJ while gGTO is 0; after a stop it
-  reads 3 here, so that a client waiting for the fingers to stop sees it.
+* gOBJ: 0 while moving, 2 when closing stopped on an object (1 when opening
+  did), 3 at the requested position (also once a held object is lost). The
+  manual says to ignore gOBJ while gGTO is 0; after a stop it reads 3 here,
+  so that a client waiting for the fingers to stop sees it.
 * rATR 1 (with rACT 1) starts the automatic release: it overrides every
   other request, opens slowly (min_speed) to the mechanical end (gPO 0) with
   gFLT 0x0B, then reports gFLT 0x0F and moves no more until a reset (rACT 0).
@@ -30,10 +30,30 @@ Instruction Manual (section 4, "Control") describes them:
   verifyCommand clamps each to 0..1), with one warning per register and
   RATE_LIMIT seconds.
 
+The fingers themselves move behind one seam, so that the register machine
+above is the same for both:
+
+* KinematicFingers (the default): straight toward the request at the speed
+  asked for; an object is a width, ``~object_width`` (m between the pads;
+  unset: none), on which closing stops;
+* PhysicsFingers (``~physics`` true): the physics cell's fingers, through the
+  private link to the arm's node (physics/link.py). rPR becomes a pad gap
+  through the unit's register scale (config/sim_devices.yaml), which the
+  finger drive approaches at rSP's speed, squeezing with at most rFR's force,
+  linear over the 2F-140's 10 to 125 N (config/physics.yaml: the manual gives
+  the range, not the law; linear is assumed); the model's own finger
+  kinematics (GripperKinematics) turn the gap into finger_joint. gPO is the
+  measured gap through the register scale, and the request once the fingers
+  stand at it: so a gap the model's pads cannot open (their last 11.5 mm)
+  reads as the request, as the kinematic fingers do. gOBJ comes from the
+  fingers stopping short of the request on an object, gCU follows the drive's
+  force (max_grip_current at 125 N).
+
 Private parameters (defaults from ``gripper`` in config/sim_devices.yaml):
   ~rate             50 Hz, status publishing rate
-  ~object_width     unset ; m between the pads: closing stops there (gOBJ 2)
-  ~initial_position gpo_open ; gPO at start-up (in reset, like a power-up)
+  ~object_width     unset ; m between the pads: closing stops there (gOBJ 2); not with ~physics
+  ~initial_position gpo_open ; gPO at start-up (in reset, like a power-up); not with ~physics
+  ~physics          false ; true: the physics cell's fingers
   ~devices_file     config/sim_devices.yaml
 """
 
@@ -42,6 +62,7 @@ import threading
 import time
 
 from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
+from ur3_ft_gripper_description.devices.physics import link
 
 # A kind of nonsense register value is warned about at most once per this many seconds.
 RATE_LIMIT = 10.0
@@ -74,26 +95,122 @@ class GripperSpec(object):
         return metres * self.scale.counts_per_metre
 
 
+# What the fingers are doing, as the seam reports it (the physics cell's own words).
+MOVING, AT_TARGET, ON_OBJECT = 'moving', 'at_target', 'on_object'
+
+
+class KinematicFingers(object):
+    """Fingers without physics: straight toward the target, stopping on a part `object_width` m wide when closing.
+
+    The seam, in register counts (gPO's scale): `position`; go(target, speed
+    counts/s, force 0..1 of the grip force range); stop(); advance(dt) -> MOVING,
+    AT_TARGET or ON_OBJECT; squeeze(), the share of the full grip force the
+    fingers press an object with.
+    """
+
+    def __init__(self, spec, object_width=None, initial_position=None):
+        self.object_position = None if object_width is None else spec.scale.position(object_width)
+        self.position = float(spec.gpo_open if initial_position is None else initial_position)
+        self.target, self.speed, self.force = self.position, 0.0, 0.0
+        self.motion = AT_TARGET
+
+    def go(self, target, speed, force):
+        if self.motion == ON_OBJECT and target >= self.position:
+            self.force = force
+            return  # still squeezing the part
+        self.target, self.speed, self.force = float(target), float(speed), float(force)
+        self.motion = MOVING
+
+    def stop(self):
+        if self.motion == MOVING:
+            self.target, self.motion = self.position, AT_TARGET
+
+    def advance(self, dt):
+        if self.motion == MOVING:
+            start = self.position
+            self.position = gripper_model.step_toward(start, self.target, self.speed, dt)
+            obj = self.object_position
+            if obj is not None and start <= obj < self.position:
+                self.position, self.motion = obj, ON_OBJECT
+            elif self.position == self.target:
+                self.motion = AT_TARGET
+        return self.motion
+
+    def squeeze(self):
+        return self.force if self.motion == ON_OBJECT else 0.0
+
+
+class PhysicsFingers(object):
+    """The physics cell's fingers through the link (`client`: a link.CellClient), in register counts.
+
+    Same seam as KinematicFingers; gPO is the gap through the unit's register
+    scale, or the request while the fingers stand at it.
+    """
+
+    def __init__(self, client, spec, open_tolerance=0.001):
+        self.client, self.scale = client, spec.scale
+        gripper = client.info['gripper']
+        self.force_range = tuple(gripper['grip_force_range'])
+        state = client.finger()[1]
+        self.speed, self.force = 0.0, self.force_range[0]
+        # At the model's open end at start-up the fingers stand as a unit opened fully: at gpo_open.
+        wide = state['opening'] >= gripper['max_opening'] - open_tolerance
+        self.state = state
+        self.target = self.position = float(spec.gpo_open) if wide else self.scale.position(state['opening'])
+        self.motion = AT_TARGET if wide else state['motion']
+
+    def _show(self, state):
+        self.state = state
+        self.motion = state['motion']
+        self.position = self.target if self.motion == AT_TARGET else self.scale.position(state['opening'])
+        return self.motion
+
+    def go(self, target, speed, force):
+        low, high = self.force_range
+        self.target, self.speed = float(target), float(speed) / self.scale.counts_per_metre
+        self.force = low + (high - low) * min(max(float(force), 0.0), 1.0)
+        self.state = self.client.finger(self.scale.opening(self.target), self.speed, self.force)[1]
+        # Moving until the cell has stepped and advance() says otherwise.
+        self.position, self.motion = self.scale.position(self.state['opening']), MOVING
+
+    def stop(self):
+        if self.motion == MOVING:
+            opening = self.client.finger()[1]['opening']
+            self.target = self.scale.position(opening)
+            self._show(self.client.finger(opening, self.speed, self.force)[1])
+
+    def advance(self, dt):
+        return self._show(self.client.finger()[1])
+
+    def squeeze(self):
+        if self.motion != ON_OBJECT:
+            return 0.0
+        return min(self.state['grip_force'] / self.force_range[1], 1.0)
+
+
 class RegisterGripper(object):
-    """The 2F-140's registers and finger motion (no ROS). Time in seconds, from `advance`."""
+    """The 2F-140's registers (no ROS) over `fingers` (default: KinematicFingers). Time in seconds, from `advance`."""
 
     def __init__(self, spec, log_warn, object_width=None, initial_position=None,
-                 clock=time.monotonic):
+                 clock=time.monotonic, fingers=None):
         self.spec = spec
         self._warn = log_warn
         self._clock = clock
         self._last_warning = {}
-        self.object_position = (None if object_width is None
-                                else spec.scale.position(object_width))
+        self.fingers = fingers or KinematicFingers(spec, object_width, initial_position)
         self.command = dict.fromkeys(COMMAND_FIELDS, 0)
-        self.position = float(spec.gpo_open if initial_position is None else initial_position)
-        self.target = self.position
         self.state = 'reset'  # reset, activating, active, releasing, released
         self.activation_left = 0.0
         self.fault = FAULT_NONE
         self.object_status = 0
         self.moving = False
         self.holding = False
+        self.closing = False
+
+    @property
+    def position(self):
+        """gPO before rounding: where the fingers are, in register counts."""
+        return self.fingers.position
 
     # -- commands ------------------------------------------------------------
 
@@ -127,7 +244,8 @@ class RegisterGripper(object):
         if values['rATR']:
             self.state = 'releasing'
             self.fault = FAULT_AUTO_RELEASE_ACTIVE
-            self.target = 0.0  # the mechanical end beyond the software limit
+            # To the mechanical end beyond the software limit, slowly.
+            self.fingers.go(0.0, self.spec.speed_counts(0), values['rFR'] / 255.0)
             self.moving, self.holding = True, False
             return
         if self.state == 'active':
@@ -138,21 +256,24 @@ class RegisterGripper(object):
         self.fault = FAULT_NONE
         self.object_status = 0
         self.moving = self.holding = False
-        self.target = self.position
+        self.fingers.stop()
 
     def _request(self, previous):
         """A command while active: start, change or stop a motion."""
         c = self.command
         if not c['rGTO']:
             self.moving = False
+            self.fingers.stop()
             self.object_status = 3 if not self.holding else self.object_status
             return
         if previous['rGTO'] and all(c[k] == previous[k] for k in ('rPR', 'rSP', 'rFR')):
             return
-        self.target = float(min(max(c['rPR'], self.spec.gpo_open), self.spec.gpo_closed))
-        closing = self.target > self.position
+        target = float(min(max(c['rPR'], self.spec.gpo_open), self.spec.gpo_closed))
+        closing = target > self.position
         if self.holding and closing:
             return  # still squeezing the object: nothing changes
+        self.fingers.go(target, self.spec.speed_counts(c['rSP']), c['rFR'] / 255.0)
+        self.closing = closing
         self.holding = False
         self.moving = True
         self.object_status = 0
@@ -175,24 +296,20 @@ class RegisterGripper(object):
         if self.state == 'reset':
             self.fault = FAULT_ACTIVATION_BIT if c['rGTO'] else FAULT_NONE
             return
-        if self.state == 'released':
+        if self.state == 'released' or not (self.moving or self.holding):
             return
-        if not self.moving:
-            return
-        speed = (self.spec.speed_counts(0) if self.state == 'releasing'
-                 else self.spec.speed_counts(c['rSP']))
-        start = self.position
-        self.position = gripper_model.step_toward(start, self.target, speed, dt)
+        motion = self.fingers.advance(dt)
         if self.state == 'releasing':
-            if self.position == self.target:
+            if motion != MOVING:
                 self.state, self.fault, self.moving = 'released', FAULT_AUTO_RELEASE_DONE, False
             return
-        obj = self.object_position
-        if obj is not None and start <= obj < self.position:
-            self.position = obj
-            self.moving, self.holding, self.object_status = False, True, 2
-        elif self.position == self.target:
-            self.moving, self.object_status = False, 3
+        if motion == ON_OBJECT and self.moving:
+            self.moving, self.holding, self.object_status = False, True, 2 if self.closing else 1
+        elif motion == AT_TARGET:
+            # Arrived, or a held object was lost and the fingers went on to the request.
+            self.moving, self.holding, self.object_status = False, False, 3
+        elif motion == MOVING and self.holding:
+            self.moving, self.holding, self.object_status = True, False, 0
 
     # -- status --------------------------------------------------------------
 
@@ -203,7 +320,7 @@ class RegisterGripper(object):
         if self.moving and self.state in ('active', 'releasing'):
             current = self.spec.moving_current
         elif self.holding and active:
-            current = self.spec.max_grip_current * c['rFR'] / 255.0
+            current = self.spec.max_grip_current * self.fingers.squeeze()
         else:
             current = 0
         return dict(
@@ -249,7 +366,21 @@ def run(rospy):
     except sim_params.ParamError as exc:
         rospy.logfatal('gripper_sim: bad parameter %s', exc)
         return 1
-    gripper = RegisterGripper(spec, rospy.logwarn, object_width=width, initial_position=initial)
+    fingers, lost = None, []
+    if rospy.get_param('~physics', False):
+        if width is not None:
+            rospy.logwarn('gripper_sim: ~object_width is not used with ~physics: the fingers stop on the '
+                          "world's objects")
+            width = None
+        client = link.wait_for_cell(rospy, 'gripper_sim')
+        if client is None:
+            return 0
+        if client.info['gripper'] is None:
+            rospy.logfatal("gripper_sim: the physics cell's model has no 2F-140: start the arm with the "
+                           'model that has it (gripper:=true)')
+            return 1
+        fingers = PhysicsFingers(client, spec)
+    gripper = RegisterGripper(spec, rospy.logwarn, object_width=width, initial_position=initial, fingers=fingers)
     publisher = rospy.Publisher('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
                                 queue_size=10)
 
@@ -257,12 +388,18 @@ def run(rospy):
 
     def on_command(msg):
         with lock:
-            gripper.set_command({name: getattr(msg, name) for name in COMMAND_FIELDS})
+            if lost:
+                return
+            try:
+                gripper.set_command({name: getattr(msg, name) for name in COMMAND_FIELDS})
+            except link.LinkError as exc:
+                lost.append(link.lost_cell(rospy, 'gripper_sim', exc))
 
     rospy.Subscriber('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output, on_command,
                      queue_size=100)
     rospy.loginfo('gripper_sim: 2F-140 in reset at gPO %d%s; activate with rACT 1 on '
-                  'Robotiq2FGripperRobotOutput', int(initial),
+                  'Robotiq2FGripperRobotOutput', int(round(gripper.position)),
+                  ', on the physics cell' if fingers else
                   '' if width is None else ', object of %g m between the pads' % width)
     clock = {'time': rospy.Time.now()}
     message = Robotiq2FGripper_robot_input()
@@ -270,7 +407,13 @@ def run(rospy):
     def step():
         now = rospy.Time.now()
         with lock:
-            gripper.advance((now - clock['time']).to_sec())
+            if lost:
+                return
+            try:
+                gripper.advance((now - clock['time']).to_sec())
+            except link.LinkError as exc:
+                lost.append(link.lost_cell(rospy, 'gripper_sim', exc))
+                return
             status = gripper.status()
         clock['time'] = now
         for name, value in status.items():
@@ -280,7 +423,8 @@ def run(rospy):
     def restart_clock():
         clock['time'] = rospy.Time.now()
 
-    return node_loop.run_at_rate(rospy, rate, step, on_time_jump=restart_clock)
+    status = node_loop.run_at_rate(rospy, rate, step, on_time_jump=restart_clock)
+    return 1 if lost else status
 
 
 def main():

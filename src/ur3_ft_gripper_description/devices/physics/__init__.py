@@ -5,7 +5,10 @@
   stepped in whole timesteps: the arm's servos, the FT 300's reading, the
   finger drive, the objects, the protective stop;
 * ``joint_motion``: the arm's joint-motion interface (HOLD, SERVO, MOVE,
-  VELOCITY) on a Cell, beside the kinematic one.
+  VELOCITY) on a Cell, beside the kinematic one;
+* ``arm_cell``: the arm node's Cell, of robot_description as loaded and ~world_file;
+* ``link``: the private socket through which the FT 300 and 2F-140 nodes read the cell;
+* ``pacing``: the real-time factor the arm's node reports.
 
 MuJoCo is optional: only this package imports it, and only when a Cell is
 made; without it, ``require_mujoco`` raises ``MissingMuJoCo``, whose message

@@ -159,7 +159,26 @@ class Cell(object):
         """The cell of the package's model for `mappings` (export_model_mappings' keys) in `world`."""
         from ...model import export
         mappings = export.model_mappings(**(mappings or {}))
-        doc = description.expand_model(mappings)
+        return cls._of_document(description.expand_model(mappings), mappings, world, initial_arm, figures)
+
+    @classmethod
+    def from_description(cls, urdf_text, ur_type, prefix='', world=None, initial_arm=None, figures=None):
+        """The cell of a model as loaded (robot_description: the user's calibration, ur_type and prefix).
+
+        The MJCF is written from that URDF itself, not from the xacro expanded again; which parts
+        are mounted is read from its links, the collision exclusions are ur_type's.
+        """
+        from xml.dom import minidom
+        doc = minidom.parseString(urdf_text)
+        links = {link.getAttribute('name') for link in doc.getElementsByTagName('link')}
+        joints = {joint.getAttribute('name') for joint in doc.getElementsByTagName('joint')}
+        mappings = dict(ur_type=ur_type, prefix=prefix,
+                        ft_sensor=str(prefix + mjcf.ft_sensor_frame() in links).lower(),
+                        gripper=str(prefix + FINGER_JOINT in joints).lower())
+        return cls._of_document(doc, mappings, world, initial_arm, figures)
+
+    @classmethod
+    def _of_document(cls, doc, mappings, world, initial_arm, figures):
         folder = tempfile.mkdtemp(prefix='ur3_ft_gripper_cell_')
         try:
             path = os.path.join(folder, 'robot.xml')
@@ -226,20 +245,25 @@ class Cell(object):
         mujoco, model, data = self.mujoco, self.model, self.data
         ctrl, positions = self._ctrl, self._arm_position_ctrl
         ctrl[self._arm_velocity_ctrl] = self._reference_velocity
+        # A protective stop already holding the arm keeps its hold reference for the whole call; one
+        # tripped in a substep holds the arm from the next substep on.
+        following = self.protective_stop is None
         for k in range(steps):
-            position = start + change * (float(k) / steps) if moving else start
-            if acceleration is not None:
-                mujoco.mj_mulM(model, data, torque, acceleration)
-                position = position + torque[self._arm_dofs] / self._arm_kp
-            ctrl[positions] = position
+            if following:
+                position = start + change * (float(k) / steps) if moving else start
+                if acceleration is not None:
+                    mujoco.mj_mulM(model, data, torque, acceleration)
+                    position = position + torque[self._arm_dofs] / self._arm_kp
+                ctrl[positions] = position
             if self.gripper is not None:
                 self._drive_finger(self.timestep)
             mujoco.mj_step(model, data)
-            if self.protective_stop is None:
+            if following:
                 self._check_contact_force()
+                following = self.protective_stop is None
             if self.gripper is not None:
                 self._watch_finger()
-        if steps:
+        if steps and following:
             self._reference = self._next_reference.copy()
             self._previous_velocity = self._reference_velocity.copy()
         return steps

@@ -1,44 +1,32 @@
-"""The arm's joint motion on physics: the simulated arm's joint-motion interface over a Cell.
+"""The arm's joint motion on physics: the simulated arm's joint-motion seam over a Cell.
 
-The simulated arm's core decides what the joints are asked to do; an
-implementation of its joint-motion interface makes them do it. The kinematic
-one moves them where they are asked (``devices/ur_arm/joints.py``); this one
-turns the same commands into the servo reference of a physics ``Cell``,
-whose joints then follow it with their dynamics, limits and contacts:
+The simulated arm's core (``devices/ur_arm/core.py``) decides what the joints
+are asked to do and hands each cycle's ``joints.JointCommand`` to its
+joint-motion object; ``joints.KinematicJoints`` moves the joints where they
+are asked. This one turns the same commands into the servo reference of a
+physics ``Cell``, whose joints then follow it with their dynamics, limits
+and contacts:
 
 * HOLD: the reference stays where it is (at start-up, the start pose);
 * SERVO: streamed positions through servoj's lookahead, the first-order lag
   of ``joints.follow`` (the kinematic model's own law), within the joints'
   velocity and position limits;
-* MOVE: the robot's own interpolation (movej, a trajectory the controller
-  executes exactly): the reference goes to the position without lag, within
-  the limits;
+* MOVE: the robot's own interpolation (movej, the twist controller): the
+  reference goes to the position without lag, within the limits;
 * VELOCITY: speedj, the reference moves at the velocity, within the limits.
 
-Interface: ``position``, ``velocity``, ``effort`` (one value per arm joint),
-``step(command, dt)``, ``protective_stop`` (None, or why the arm stopped;
-it holds the arm until ``clear_protective_stop()``).
-
-``JointCommand`` here is a stand-in for the arm core's command type: any
-object with ``mode`` (one of the four names) and ``position`` / ``velocity``
-(sequences, or None where the mode needs none) will do.
+``protective_stop`` is set anew by every ``step``: the reason when the robot's
+contact force passed the cell's limit during that step, else None. The cell
+then holds the arm where it stopped (the servos no longer press on), and this
+object releases the cell's own hold at once: the core latches the stop
+(safety mode PROTECTIVE_STOP) and commands HOLD until the dashboard's
+``unlock protective stop``, as the real controller does.
 """
 
 import numpy as np
 
 from ..ur_arm import joints
-
-HOLD, SERVO, MOVE, VELOCITY = 'HOLD', 'SERVO', 'MOVE', 'VELOCITY'
-MODES = (HOLD, SERVO, MOVE, VELOCITY)
-
-
-class JointCommand(object):
-    """What the arm's joints are asked to do: a mode and its positions or velocities (rad, rad/s)."""
-
-    def __init__(self, mode, position=None, velocity=None):
-        if mode not in MODES:
-            raise ValueError('joint command mode %r: use one of %s' % (mode, ', '.join(MODES)))
-        self.mode, self.position, self.velocity = mode, position, velocity
+from ..ur_arm.joints import HOLD, MOVE, SERVO, VELOCITY
 
 
 class PhysicsJointMotion(object):
@@ -55,6 +43,12 @@ class PhysicsJointMotion(object):
         self.lower, self.upper = cell.arm_lower, cell.arm_upper
         self.reference = cell.arm_position
         self._still = np.zeros(len(self.reference))
+        self.protective_stop = None
+
+    @classmethod
+    def from_settings(cls, cell, settings):
+        """With the arm's settings (settings.read_settings): servoj's lookahead, the model's velocity limits."""
+        return cls(cell, settings.servo_lag, settings.arm.velocity)
 
     @property
     def position(self):
@@ -68,39 +62,29 @@ class PhysicsJointMotion(object):
     def effort(self):
         return self.cell.arm_effort
 
-    @property
-    def protective_stop(self):
-        return self.cell.protective_stop
-
-    def clear_protective_stop(self):
-        self.cell.clear_protective_stop()
-        self.reference = self.cell.arm_position
-
     def step(self, command, dt):
-        """Follow `command` for `dt` seconds."""
-        if self.cell.protective_stop is not None:
-            self.reference = self.cell.arm_position
-            self.cell.step(dt)
-            return
+        """Follow `command` for `dt` seconds; protective_stop says whether the robot stopped meanwhile."""
         mode = command.mode
         if mode == HOLD:
-            self.cell.set_arm_reference(self.reference, self._still)
-            self.cell.step(dt)
-            return
-        if mode == SERVO:
-            target, lag = command.position, self.lookahead
-        elif mode == MOVE:
-            target, lag = command.position, 0.0
-        elif mode == VELOCITY:
-            target, lag = self.reference + np.asarray(command.velocity, dtype=float) * dt, 0.0
+            velocity = self._still
         else:
-            raise ValueError('joint command mode %r: use one of %s' % (mode, ', '.join(MODES)))
-        if dt > 0.0:
-            self.reference, velocity = joints.follow(self.reference, target, dt, lag, self.velocity_limits,
-                                                     self.lower, self.upper)
-        else:
-            velocity = np.zeros(len(self.reference))
+            if mode == SERVO:
+                target, lag = command.position, self.lookahead
+            elif mode == MOVE:
+                target, lag = command.position, 0.0
+            elif mode == VELOCITY:
+                target, lag = self.reference + np.asarray(command.velocity, dtype=float) * dt, 0.0
+            else:
+                raise ValueError('joint command mode %r: use one of %s' % (mode, ', '.join(joints.MODES)))
+            if dt > 0.0:
+                self.reference, velocity = joints.follow(self.reference, target, dt, lag, self.velocity_limits,
+                                                         self.lower, self.upper)
+            else:
+                velocity = self._still
         self.cell.set_arm_reference(self.reference, velocity)
         self.cell.step(dt)
-        if self.cell.protective_stop is not None:
+        self.protective_stop = self.cell.protective_stop
+        if self.protective_stop is not None:
+            # The cell holds the arm where it stopped: from here the reference starts, and the latch is the core's.
+            self.cell.clear_protective_stop()
             self.reference = self.cell.arm_position

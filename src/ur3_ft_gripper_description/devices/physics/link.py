@@ -1,12 +1,22 @@
 """The private link between the physics cell and the FT 300 and 2F-140 nodes (no ROS).
 
-The cell lives in the arm's process, which steps it at the controller's
-rate; the simulated FT 300 (robotiq_ft_sensor) and 2F-140 (robotiq2FGripper)
-keep their own processes and node names, and reach the cell through a local
-socket, never through a ROS topic of this package's invention. The socket is
-the standard library's ``multiprocessing.connection`` over AF_UNIX, in a
-folder only its user can enter, with an optional shared key (HMAC
-challenge, ``authkey``).
+The cell lives in the arm's process (node ``ur_hardware_interface``), which
+steps it at the controller's rate; the simulated FT 300 (robotiq_ft_sensor)
+and 2F-140 (robotiq2FGripper) keep their own processes and node names, and
+reach the cell through a local socket, never through a ROS topic of this
+package's invention. The socket is the standard library's
+``multiprocessing.connection`` over AF_UNIX, in a folder only its user can
+enter (its messages are pickles: the folder's permissions keep other users
+out), with an optional shared key (HMAC challenge, ``authkey``).
+
+Where the socket is (``cell_address``): a file in ``$ROS_HOME/ur3_ft_gripper_cell/``
+(``~/.ros`` by default) named by a hash of the ROS master (its port and its
+process id, which its API gives every node: a URI can name one master in
+several ways, e.g. localhost or the host name) and the resolved name of the
+arm's node. The arm takes its own name; a device node resolves
+``ur_hardware_interface`` in its own namespace, where the launch files start
+the three side by side. So robots in different namespaces, or on different
+masters, each have their own cell, and no parameter is needed.
 
 Protocol: request and reply are tuples, one reply per request, in order.
 
@@ -19,6 +29,14 @@ Protocol: request and reply are tuples, one reply per request, in order.
     ('finger', opening, speed, force) -> ('finger', time, state)
                                        command the fingers (m, m/s, N), then their state
     ('finger',)                     -> ('finger', time, state)     the state alone
+    ('truth',)                      -> ('truth', time, {'contact_force': (fx, fy, fz),
+                                        'objects': {name: ((x, y, z), (qw, qx, qy, qz))},
+                                        'gripper_base': ((x, y, z), 3x3 rows) or None,
+                                        'arm_position': (rad, ...), 'finger': state or None})
+                                       MuJoCo's own figures, for tests and benchmarks to judge
+                                       the interfaces by: the world's net contact force on the
+                                       robot (N, world frame), the objects' poses and the 2F-140's
+                                       base pose (world frame)
     anything else, or a failure     -> ('error', 'one line')
 
 `time` is the cell's simulated time (s); `state` is the cell's FingerState as a dict
@@ -26,12 +44,74 @@ Protocol: request and reply are tuples, one reply per request, in order.
 says hello first; a server of another VERSION answers ('error', ...).
 """
 
+import hashlib
 import os
 import threading
+import time
 from multiprocessing import AuthenticationError
 from multiprocessing.connection import Client, Listener
 
 VERSION = 1
+# ur_robot_driver's node, which holds the cell with physics.
+ARM_NODE = 'ur_hardware_interface'
+FOLDER = 'ur3_ft_gripper_cell'
+
+
+def cell_address(master, arm_node, ros_home=None):
+    """The socket of the cell that the arm node `arm_node` (resolved name) serves on `master`.
+
+    `master`: what identifies the master, master_identity()'s.
+    """
+    if ros_home is None:
+        import rospkg
+        ros_home = rospkg.get_ros_home()
+    key = hashlib.sha1(('%s %s' % (master, arm_node)).encode('utf-8')).hexdigest()[:16]
+    return os.path.join(ros_home, FOLDER, key + '.sock')
+
+
+def master_identity(caller):
+    """'<port> <pid>' of the ROS master this process uses (rosgraph; `caller`: a node name for its API)."""
+    import rosgraph
+    from urllib.parse import urlparse
+    master = rosgraph.Master(caller)
+    return '%s %d' % (urlparse(master.master_uri).port, master.getPid())
+
+
+def node_cell_address(rospy):
+    """(address, resolved name) of the cell of ur_hardware_interface in this node's namespace (the arm's own
+    too: a node's relative names resolve in its namespace)."""
+    arm = rospy.resolve_name(ARM_NODE)
+    return cell_address(master_identity(rospy.get_name()), arm), arm
+
+
+# A device node waiting for the cell says so after this long (s): the arm's node builds the cell first.
+QUIET_WAIT = 20.0
+
+
+def wait_for_cell(rospy, who, poll=0.2):
+    """A device node's CellClient of the cell of ur_hardware_interface in its namespace, once it serves.
+
+    Warns once if it takes longer than QUIET_WAIT; None if the node shuts down meanwhile.
+    """
+    address, arm = node_cell_address(rospy)
+    start, said = time.monotonic(), False
+    while not rospy.is_shutdown():
+        try:
+            return CellClient(address)
+        except LinkError as exc:
+            if not said and time.monotonic() - start > QUIET_WAIT:
+                said = True
+                rospy.logwarn('%s: waiting for the physics cell of %s (%s); it serves once the arm runs with '
+                              'physics (sim_arm.launch physics:=true)' % (who, arm, exc))
+        time.sleep(poll)
+    return None
+
+
+def lost_cell(rospy, who, error):
+    """A device node lost its cell: one fatal line, and the node shuts down (respawn starts it again)."""
+    rospy.logfatal('%s: %s: exiting (launch files start it again with respawn="true")' % (who, error))
+    rospy.signal_shutdown('the physics cell is gone')
+    return error
 
 
 class LinkError(RuntimeError):
@@ -49,6 +129,7 @@ class CellServer(object):
         self.lock = lock or threading.RLock()
         folder = os.path.dirname(os.path.abspath(path))
         os.makedirs(folder, mode=0o700, exist_ok=True)
+        os.chmod(folder, 0o700)  # made earlier with other permissions: only this user may connect
         if os.path.exists(path):
             os.unlink(path)  # left by a process that died; a live server would still hold it open
         self._listener = Listener(path, family='AF_UNIX', authkey=authkey)
@@ -107,7 +188,22 @@ class CellServer(object):
                 if arguments:
                     cell.command_finger(*(float(v) for v in arguments))
                 return ('finger', cell.time, dict(vars(cell.finger())))
-        return ('error', 'unknown request %r: use hello, wrench or finger' % (request,))
+            if name == 'truth' and not arguments:
+                return ('truth', cell.time, _truth(cell))
+        return ('error', 'unknown request %r: use hello, wrench, finger or truth' % (request,))
+
+
+def _truth(cell):
+    def floats(values):
+        return tuple(float(v) for v in values)
+    base = None
+    if cell.gripper is not None:
+        position, rotation = cell.body_pose(cell.gripper_base)
+        base = (floats(position), tuple(floats(row) for row in rotation))
+    return dict(contact_force=floats(cell.contact_force()),
+                objects={name: tuple(floats(v) for v in cell.object_pose(name)) for name in cell.objects},
+                gripper_base=base, arm_position=floats(cell.arm_position),
+                finger=dict(vars(cell.finger())) if cell.gripper is not None else None)
 
 
 class CellClient(object):
@@ -141,6 +237,10 @@ class CellClient(object):
         """(time, state dict); with opening, speed and force, the fingers are commanded first."""
         request = ('finger',) if opening is None else ('finger', opening, speed, force)
         return self._ask(*request)[1:]
+
+    def truth(self):
+        """(time, dict) of MuJoCo's own figures (see the protocol)."""
+        return self._ask('truth')[1:]
 
     def close(self):
         self._connection.close()

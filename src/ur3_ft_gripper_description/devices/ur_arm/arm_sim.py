@@ -23,6 +23,13 @@ This node only adapts: it converts messages and calls core.ArmCore, which
 decides everything (see there), under one lock. The joints are
 joints.KinematicJoints: they go where they are commanded, no faster than the
 model's velocity limits; no dynamics, no collisions, no protective stops.
+
+With ~physics true they move on MuJoCo instead (physics.joint_motion): the
+node builds the physics cell of robot_description in ~world_file
+(physics.arm_cell), steps it with its control loop, serves it to the FT 300
+and 2F-140 nodes through the private link (physics.link), and publishes
+the achieved real-time factor on /diagnostics (diagnostic_msgs/DiagnosticArray,
+once a second), warning once when the machine cannot keep up.
 """
 
 import threading
@@ -47,6 +54,7 @@ from ur_msgs.msg import Analog, Digital, IOStates, ToolDataMsg
 from .. import sim_params
 from ..node_loop import main as node_main
 from ..node_loop import run_at_rate
+from ..physics import link
 from . import cartesian
 from . import core as arm_core
 from . import joints
@@ -54,7 +62,7 @@ from .dashboard import DashboardServices
 from .settings import read_settings
 from .trajectory import GoalError, JointTolerance, Point
 
-NODE = 'ur_hardware_interface'
+NODE = link.ARM_NODE
 ROBOT_MODES = {getattr(RobotMode, n): n for n in dir(RobotMode)
                if n.isupper() and isinstance(getattr(RobotMode, n), int)}
 
@@ -63,9 +71,16 @@ class ArmSim(object):
     def __init__(self, rospy, get_param=None):
         self.rospy = rospy
         self.lock = threading.RLock()
-        settings = read_settings(get_param or rospy.get_param)
+        get_param = get_param or rospy.get_param
+        settings = read_settings(get_param)
         self.prefix, self.loop_hz = settings.prefix, settings.loop_hz
-        self.core = core = arm_core.ArmCore(settings, joints.KinematicJoints.from_settings(settings))
+        self.physics = None
+        if get_param('~physics', False):
+            self.physics = PhysicsCell(rospy, get_param, settings, self.lock)
+            motion = self.physics.motion
+        else:
+            motion = joints.KinematicJoints.from_settings(settings)
+        self.core = core = arm_core.ArmCore(settings, motion)
         self.goal_handles = {}       # (controller, goal id) -> ServerGoalHandle
         self.published = None        # (program running, robot mode, safety mode) last published on the latched topics
         self.joint_names = core.joint_names
@@ -292,6 +307,8 @@ class ArmSim(object):
             snapshot = self.core.step(dt)
         self._report()
         self._publish(snapshot)
+        if self.physics is not None:
+            self.physics.after_step()
 
     def _publish(self, s):
         now = self.rospy.Time.now()
@@ -344,6 +361,59 @@ class ArmSim(object):
             self.state_pubs[name].publish(state)
 
 
+class PhysicsCell(object):
+    """The physics cell of this node (~physics): its joint motion, its link server, its real-time factor."""
+
+    DIAGNOSTICS_PERIOD = 1.0  # s
+
+    def __init__(self, rospy, get_param, settings, lock):
+        from diagnostic_msgs.msg import DiagnosticArray
+        from ..physics.arm_cell import cell_for_arm
+        from ..physics.joint_motion import PhysicsJointMotion
+        from ..physics.pacing import RealTimeMeter
+        self.rospy = rospy
+        self.cell = cell_for_arm(get_param, settings)
+        self.world = self.cell.world.path
+        self.motion = PhysicsJointMotion.from_settings(self.cell, settings)
+        self.meter = RealTimeMeter()
+        self.address = link.node_cell_address(rospy)[0]
+        self.server = link.CellServer(self.cell, self.address, lock=lock)
+        rospy.on_shutdown(self.server.close)
+        self.diagnostics = rospy.Publisher('/diagnostics', DiagnosticArray, queue_size=10)
+        self.next_report = 0.0
+        self.cycles = 0
+        rospy.loginfo('%s: physics (MuJoCo) with the world %s; the FT 300 and 2F-140 nodes reach the cell at %s'
+                      % (NODE, self.world, self.address))
+
+    def after_step(self):
+        """Once per control cycle, after the core's step: the real-time factor, and its report once a second."""
+        wall = self.rospy.get_time()
+        self.meter.add(wall, self.cell.time)
+        self.cycles += 1
+        warning = self.meter.slow_warning()
+        if warning and not self.rospy.core.is_shutdown_requested():  # a shutdown stalls the loop: no warning
+            self.rospy.logwarn('%s: %s' % (NODE, warning))
+        if wall >= self.next_report:
+            self.next_report = wall + self.DIAGNOSTICS_PERIOD
+            self._report(wall)
+
+    def _report(self, wall):
+        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+        factor = self.meter.factor()
+        slow = factor is not None and self.meter.full() and factor < self.meter.slow
+        status = DiagnosticStatus(
+            level=DiagnosticStatus.WARN if slow else DiagnosticStatus.OK,
+            name='%s: physics' % self.rospy.get_name(), hardware_id='physics cell (MuJoCo)',
+            message=('real-time factor %.2f' % factor) if factor is not None else 'starting',
+            values=[KeyValue(key='real-time factor', value='%.3f' % factor if factor is not None else ''),
+                    KeyValue(key='simulated time (s)', value='%.3f' % self.cell.time),
+                    KeyValue(key='control cycles', value=str(self.cycles)),
+                    KeyValue(key='world', value=self.world)])
+        message = DiagnosticArray(status=[status])
+        message.header.stamp = self.rospy.Time.now()
+        self.diagnostics.publish(message)
+
+
 def _points(points):
     return [Point(p.time_from_start.to_sec(), p.positions, p.velocities, p.accelerations) for p in points]
 
@@ -354,9 +424,12 @@ def _tolerances(tolerances):
 
 def main():
     def run(rospy):
+        from ...model.names import DescriptionError
+        from ..physics import MissingMuJoCo
+        from ..physics.world import WorldError
         try:
             sim = ArmSim(rospy)
-        except sim_params.ParamError as exc:
+        except (sim_params.ParamError, MissingMuJoCo, WorldError, DescriptionError) as exc:
             rospy.logfatal('%s: %s' % (NODE, exc))
             return 1
         longest_step = 10.0 / sim.loop_hz

@@ -27,6 +27,7 @@ def read_settings(get_param):
     ur_type = get_param('~ur_type', 'ur5e')
     if not isinstance(ur_type, str) or not ur_type:
         raise sim_params.ParamError('~ur_type=%r must be a UR model name, e.g. ur5e' % (ur_type,))
+    settings.ur_type = ur_type
     try:
         settings.software = software.for_model(ur_type)
     except software.UnknownModel as exc:

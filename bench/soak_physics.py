@@ -1,0 +1,91 @@
+"""Soak of the physics cell (bench/soak.py --what physics): the bring-up with sim:=true physics:=true, driven for a long time.
+
+Through the real drivers' interfaces only, the shipped examples in a loop:
+pick and weigh (the default world's block: up, weighed, put back, opened),
+then the guarded touch (down onto the table until 10 N, back off, back to the
+trajectory controller). Limits: the resident memory of the arm's process
+(where the cell steps), of the FT 300's and of the gripper's grows by at
+most 5 MB each after the warm-up; every cycle succeeds and weighs the block
+within 2 % of its world-file mass.
+"""
+import os
+import sys
+import time
+
+import benchlib
+
+sys.path.insert(0, os.path.join(benchlib.PACKAGE_DIR, 'examples'))
+import guarded_touch  # noqa: E402  (the examples, as shipped)
+import pick_and_weigh  # noqa: E402
+
+RSS_LIMIT_MB = 5.0
+WEIGHT_TOLERANCE = 0.02
+NODES = ('/ur_hardware_interface', '/robotiq_ft_sensor', '/robotiq2FGripper')
+
+
+def run(args, seconds, record_section):
+    """The soak; exit status 0 when every limit holds. Writes its section into args.record if given."""
+    load_before = benchlib.load_average()
+    master = benchlib.use_new_master()
+    launch = None
+    problems, rss, cycles, weights, cpu = [], {}, 0, [], None
+    try:
+        import rospy
+        launch = benchlib.roslaunch('ur3_ft_gripper_description', 'ur3_ft_gripper_bringup.launch', 'sim:=true',
+                                    'physics:=true', log=os.environ.get('SOAK_LOG'))
+        rospy.init_node('soak_physics', disable_signals=True)
+        quiet = lambda text: None  # noqa: E731
+        picker = pick_and_weigh.PickAndWeigh(rospy, say=quiet)
+        toucher = guarded_touch.GuardedTouch(rospy, say=quiet)
+        x, y, top, yaw, _, mass = pick_and_weigh.target_of(pick_and_weigh.default_world_file(), 'block')
+        pids = {node: benchlib.node_pid(node) for node in NODES}
+        start = time.monotonic()
+        warm = None
+        while time.monotonic() - start < args.warmup + seconds:
+            try:
+                picker.pick(x, y, top, yaw)
+                weighed, _ = picker.weigh()
+                picker.put_down()
+                toucher.start(*guarded_touch.START_XY)
+                toucher.touch(0.02, 10.0)
+                toucher.back_off(0.02)
+                weights.append(weighed)
+                if abs(weighed - mass) > WEIGHT_TOLERANCE * mass:
+                    problems.append('cycle %d: weighed %.4f kg, not %.4f' % (cycles, weighed, mass))
+            except Exception as exc:  # a cycle that failed is a finding, the soak goes on
+                problems.append('cycle %d: %s' % (cycles, ' '.join(str(exc).split())))
+            cycles += 1
+            now = time.monotonic()
+            if warm is None and now - start >= args.warmup:
+                warm = (now, {n: benchlib.cpu_seconds(p) for n, p in pids.items()}, cycles, len(problems))
+                rss = {n: [benchlib.rss_mb(p)] for n, p in pids.items()}
+            elif warm is not None:
+                for n, p in pids.items():
+                    rss[n].append(benchlib.rss_mb(p))
+        if warm is None:
+            raise RuntimeError('the run ended within the warm-up: give more time than --warmup')
+        cpu = {n: 100.0 * (benchlib.cpu_seconds(p) - warm[1][n]) / (time.monotonic() - warm[0])
+               for n, p in pids.items()}
+        measured_cycles = cycles - warm[2]
+    finally:
+        benchlib.stop(launch)
+        benchlib.stop(master)
+    rows = ['| measured | %.0f s after %.0f s warm-up; %d cycles (%d in the warm-up) |' % (
+        seconds, args.warmup, measured_cycles, cycles - measured_cycles),
+        '| each cycle | examples/pick_and_weigh.py on the default world\'s block, then examples/guarded_touch.py |',
+        '| block weighed (world file: 0.3 kg): min, max over %d cycles | %.4f, %.4f kg |' % (
+            len(weights), min(weights or [float('nan')]), max(weights or [float('nan')]))]
+    for n in NODES:
+        growth = max(rss[n]) - rss[n][0]
+        if growth > RSS_LIMIT_MB:
+            problems.append('%s resident memory grew by %.1f MB (limit %g)' % (n, growth, RSS_LIMIT_MB))
+        rows.append('| %s resident memory: after warm-up, max, end, growth | %.1f, %.1f, %.1f MB, +%.2f MB '
+                    '(limit %g MB) |' % (n, rss[n][0], max(rss[n]), rss[n][-1], growth, RSS_LIMIT_MB))
+    rows.append('| CPU, mean over the measurement (%% of one core): ur_hardware_interface (arm + cell, 125 Hz), '
+                'robotiq_ft_sensor, robotiq2FGripper | %.0f, %.0f, %.0f |' % tuple(cpu[n] for n in NODES))
+    rows.append('| cycles that failed | %d |' % len(problems))
+    return benchlib.report_soak(
+        args.record, record_section,
+        '## Soak of the physics cell (`bash tools/quickstart soak --what physics`)',
+        'ur3_ft_gripper_bringup.launch sim:=true physics:=true (default world) on its own master, driven through '
+        'the real drivers\' interfaces only.', load_before, rows, problems, 'soak (physics)')

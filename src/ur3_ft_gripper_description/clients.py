@@ -1,0 +1,290 @@
+"""Small clients of the real drivers' interfaces, for the examples and for your own scripts.
+
+Each speaks only what the real driver offers, so a script built on them runs
+unchanged on the real cell and on the simulation (``sim:=true``, with or
+without ``physics:=true``):
+
+* ``UrArm``: ur_robot_driver's ``scaled_pos_joint_traj_controller``
+  (control_msgs/FollowJointTrajectory), ``controller_manager/switch_controller``,
+  ``twist_controller/command`` and ``joint_states``;
+* ``Gripper2F``: Robotiq's register topics ``Robotiq2FGripperRobotOutput`` /
+  ``Robotiq2FGripperRobotInput`` (2F-85 & 2F-140 manual, section 4);
+* ``FT300``: rq_sensor's ``robotiq_ft_wrench`` and its ``robotiq_ft_sensor_acc``
+  service (command_id 8: SET_ZERO).
+
+Where the tool goes is planned with ``ToolKinematics``: the arm's inverse
+kinematics for the model in ``robot_description`` (yours, calibrated), for
+the 2F-140's ``gripper_tcp``. Every wait ends, on time or with a
+``CellError`` naming what did not happen.
+"""
+
+import collections
+import math
+import threading
+import time
+
+import numpy as np
+
+ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
+              'wrist_3_joint')
+TRAJECTORY_CONTROLLER = 'scaled_pos_joint_traj_controller'
+# ur_robot_driver's hardware interface node, as its bring-up names it.
+HARDWARE_INTERFACE = '/ur_hardware_interface/'
+STANDARD_GRAVITY = 9.80665
+
+
+class CellError(RuntimeError):
+    """Something the cell did not do; the message is one line."""
+
+
+def wait_until(condition, what, timeout, step=0.01):
+    """The first true value of condition(), or CellError naming `what` after `timeout` s."""
+    end = time.monotonic() + timeout
+    while True:
+        value = condition()
+        if value:
+            return value
+        if time.monotonic() > end:
+            raise CellError('no %s within %g s' % (what, timeout))
+        time.sleep(step)
+
+
+class ToolKinematics(object):
+    """Joint positions that put the 2F-140's gripper_tcp at a pose in base_link, from the model as loaded."""
+
+    def __init__(self, rospy, prefix=''):
+        from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+        self.prefix = prefix
+        self.joints = [prefix + name for name in ARM_JOINTS]
+        self.arm = ArmKinematics(rospy.get_param('robot_description'), self.joints, prefix + 'base_link',
+                                 prefix + 'gripper_tcp')
+
+    def tool_down(self, x, y, z, yaw=0.0):
+        """The 4x4 pose of gripper_tcp at (x, y, z) (m, base_link), pointing straight down, its pads closing
+        along base_link's y axis turned by `yaw` (rad) about z (the arm's start pose has yaw 0)."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        pose = np.eye(4)
+        # Tool z down; the pads close along the tool's x, here (-s, c, 0).
+        pose[:3, :3] = np.array([[-s, c, 0.0], [c, s, 0.0], [0.0, 0.0, -1.0]])
+        pose[:3, 3] = (x, y, z)
+        return pose
+
+    def joints_for(self, pose, seed):
+        """Joint positions (rad) for `pose` near `seed`; CellError if out of reach.
+
+        The inverse kinematics is local: it starts from `seed`, and then from `seed` turned about the
+        base (shoulder_pan and wrist_3) toward the pose's direction, which is the near solution for
+        a tool that keeps pointing down.
+        """
+        seed = np.asarray(seed, dtype=float)
+        here = self.arm.forward(seed)[:3, 3]
+        turn = math.atan2(pose[1, 3], pose[0, 3]) - math.atan2(here[1], here[0])
+        turn = math.atan2(math.sin(turn), math.cos(turn))
+        for start in (seed, seed + np.array([turn, 0, 0, 0, 0, turn]), seed + np.array([turn, 0, 0, 0, 0, -turn])):
+            q = self.arm.inverse(pose, start, tolerance=1e-8, iterations=300)
+            if q is not None:
+                return [float(v) for v in q]
+        raise CellError('the pose %s is out of the arm\'s reach' % np.round(pose[:3, 3], 3).tolist())
+
+    def tool_pose(self, positions):
+        return self.arm.forward(positions)
+
+    def path_to(self, seed, x, y, z, clear_height, yaw=0.0):
+        """Joint waypoints from `seed` to the tool at (x, y, z) pointing down, passing at `clear_height`:
+        straight up, over at that height, down. What stands on the table stays out of the way."""
+        here = self.tool_pose(seed)[:3, 3]
+        path = []
+        for point in ((here[0], here[1], max(here[2], clear_height)), (x, y, max(z, clear_height)), (x, y, z)):
+            seed = self.joints_for(self.tool_down(point[0], point[1], point[2], yaw), seed)
+            path.append(seed)
+        return path
+
+
+class UrArm(object):
+    """ur_robot_driver's joint trajectory controller, controller switching, twist controller and joint states."""
+
+    def __init__(self, rospy, prefix='', timeout=60.0):
+        import actionlib
+        from control_msgs.msg import FollowJointTrajectoryAction
+        from controller_manager_msgs.srv import SwitchController
+        from geometry_msgs.msg import Twist
+        from sensor_msgs.msg import JointState
+        self.rospy = rospy
+        self.joints = [prefix + name for name in ARM_JOINTS]
+        self.positions = None
+        self._lock = threading.Lock()
+        rospy.Subscriber('joint_states', JointState, self._on_joint_state, queue_size=1)
+        self.trajectory = actionlib.SimpleActionClient(TRAJECTORY_CONTROLLER + '/follow_joint_trajectory',
+                                                       FollowJointTrajectoryAction)
+        if not self.trajectory.wait_for_server(rospy.Duration(timeout)):
+            raise CellError('no action server %s/follow_joint_trajectory: is the arm up?' % TRAJECTORY_CONTROLLER)
+        rospy.wait_for_service('controller_manager/switch_controller', timeout)
+        self.switch = rospy.ServiceProxy('controller_manager/switch_controller', SwitchController)
+        self.twist_publisher = rospy.Publisher('twist_controller/command', Twist, queue_size=1)
+        from ur_dashboard_msgs.msg import SafetyMode
+        self.safety_names = {getattr(SafetyMode, n): n for n in dir(SafetyMode) if n.isupper()}
+        self.safety_mode = None
+        rospy.Subscriber(HARDWARE_INTERFACE + 'safety_mode', SafetyMode,
+                         lambda msg: setattr(self, 'safety_mode', self.safety_names.get(msg.mode)), queue_size=1)
+        wait_until(lambda: self.positions is not None, 'joint_states of the arm', timeout)
+
+    def _on_joint_state(self, msg):
+        if self.joints[0] in msg.name:
+            with self._lock:
+                self.positions = [msg.position[msg.name.index(j)] for j in self.joints]
+
+    def joint_positions(self):
+        with self._lock:
+            return list(self.positions)
+
+    def move(self, positions, duration):
+        """Go to `positions` (rad) in `duration` s through the scaled trajectory controller, ending at rest."""
+        from control_msgs.msg import FollowJointTrajectoryGoal, FollowJointTrajectoryResult
+        from trajectory_msgs.msg import JointTrajectoryPoint
+        goal = FollowJointTrajectoryGoal()
+        goal.trajectory.joint_names = self.joints
+        goal.trajectory.points.append(JointTrajectoryPoint(
+            positions=list(positions), velocities=[0.0] * 6, time_from_start=self.rospy.Duration(duration)))
+        self.trajectory.send_goal(goal)
+        end = time.monotonic() + duration + 30.0
+        while not self.trajectory.wait_for_result(self.rospy.Duration(0.1)):
+            self.check_safety()
+            if time.monotonic() > end:
+                raise CellError('the trajectory did not end within %g s' % (duration + 30.0))
+        result = self.trajectory.get_result()
+        if result.error_code != FollowJointTrajectoryResult.SUCCESSFUL:
+            raise CellError('the trajectory failed: error_code %d %s' % (result.error_code, result.error_string))
+
+    def check_safety(self):
+        """CellError if the robot stopped itself (a protective stop, an emergency stop...)."""
+        if self.safety_mode not in (None, 'NORMAL', 'REDUCED'):
+            raise CellError('the robot stopped: safety mode %s' % self.safety_mode)
+
+    def move_along(self, path, speed=0.5):
+        """move_steadily() through each joint waypoint of `path` in turn."""
+        for positions in path:
+            self.move_steadily(positions, speed)
+
+    def move_steadily(self, positions, speed=0.5, shortest=1.0):
+        """move() taking as long as the largest joint motion needs at `speed` (rad/s), at least `shortest` s."""
+        travel = max(abs(a - b) for a, b in zip(positions, self.joint_positions()))
+        self.move(positions, max(shortest, travel / speed))
+
+    def only(self, controller, stop):
+        """Start `controller` and stop the controllers `stop` (controller_manager's switch, STRICT)."""
+        from controller_manager_msgs.srv import SwitchControllerRequest
+        reply = self.switch(SwitchControllerRequest(start_controllers=[controller], stop_controllers=list(stop),
+                                                    strictness=SwitchControllerRequest.STRICT))
+        if not reply.ok:
+            raise CellError('controller_manager did not switch to %s' % controller)
+
+    def twist(self, vx=0.0, vy=0.0, vz=0.0, wx=0.0, wy=0.0, wz=0.0):
+        """A twist of the tool (m/s, rad/s, the robot's base frame) on twist_controller/command."""
+        from geometry_msgs.msg import Twist
+        message = Twist()
+        message.linear.x, message.linear.y, message.linear.z = vx, vy, vz
+        message.angular.x, message.angular.y, message.angular.z = wx, wy, wz
+        self.twist_publisher.publish(message)
+
+
+class Gripper2F(object):
+    """A Robotiq 2F-85/2F-140 through its register topics: activate, go to a position, read the status."""
+
+    # gOBJ (manual 4.4): 0 moving, 1 stopped on an object while opening, 2 while closing, 3 at the request.
+    MOVING, OBJECT_OPENING, OBJECT_CLOSING, AT_REQUEST = 0, 1, 2, 3
+
+    def __init__(self, rospy, timeout=30.0):
+        from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
+        self.rospy = rospy
+        self.output_type = Robotiq2FGripper_robot_output
+        self.status = None
+        self._received = 0
+        self._condition = threading.Condition()
+        rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, self._on_status, queue_size=10)
+        self.publisher = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
+                                         queue_size=10)
+        wait_until(lambda: self.status is not None and self.publisher.get_num_connections(),
+                   'gripper status and command subscriber', timeout)
+
+    def _on_status(self, msg):
+        with self._condition:
+            self.status = msg
+            self._received += 1
+            self._condition.notify_all()
+
+    def send(self, **registers):
+        self.publisher.publish(self.output_type(**registers))
+
+    def wait_status(self, check, what, timeout=10.0, skip=2):
+        """The first status satisfying check(status), `skip` statuses after now (the command's effect)."""
+        with self._condition:
+            start = self._received
+            end = time.monotonic() + timeout
+            while not (self._received >= start + skip and check(self.status)):
+                left = end - time.monotonic()
+                if left <= 0:
+                    raise CellError('no gripper status with %s within %g s (last: gOBJ %d gPO %d gSTA %d)' % (
+                        what, timeout, self.status.gOBJ, self.status.gPO, self.status.gSTA))
+                self._condition.wait(left)
+            return self.status
+
+    def activate(self):
+        """Reset, then activate (the fingers end open); returns the status."""
+        self.send(rACT=0)
+        self.wait_status(lambda s: s.gSTA == 0, 'gSTA 0 (reset)')
+        self.send(rACT=1, rGTO=1, rPR=0, rSP=255, rFR=150)
+        return self.wait_status(lambda s: s.gSTA == 3 and s.gOBJ == self.AT_REQUEST, 'gSTA 3 and gOBJ 3 (active)')
+
+    def go(self, position, speed=255, force=150, timeout=10.0):
+        """Move to register position 0..255 at rSP `speed`, rFR `force`; the status once the fingers stopped."""
+        self.send(rACT=1, rGTO=1, rPR=position, rSP=speed, rFR=force)
+        return self.wait_status(lambda s: s.gPR == position and s.gOBJ != self.MOVING,
+                                'the fingers stopped (gOBJ 1, 2 or 3) for rPR %d' % position, timeout)
+
+
+class FT300(object):
+    """The Robotiq FT 300 through rq_sensor's interface: its wrench stream and SET_ZERO."""
+
+    def __init__(self, rospy, timeout=30.0):
+        from geometry_msgs.msg import WrenchStamped
+        from robotiq_ft_sensor.srv import sensor_accessor
+        self.rospy = rospy
+        self.readings = collections.deque(maxlen=3000)  # (receipt time, (fx, fy, fz, tx, ty, tz))
+        self._lock = threading.Lock()
+        rospy.Subscriber('robotiq_ft_wrench', WrenchStamped, self._on_wrench, queue_size=100)
+        rospy.wait_for_service('robotiq_ft_sensor_acc', timeout)
+        self.accessor = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
+        wait_until(lambda: self.readings, 'robotiq_ft_wrench', timeout)
+
+    def _on_wrench(self, msg):
+        f, t = msg.wrench.force, msg.wrench.torque
+        with self._lock:
+            self.readings.append((time.monotonic(), (f.x, f.y, f.z, t.x, t.y, t.z)))
+
+    def latest(self):
+        with self._lock:
+            return self.readings[-1][1]
+
+    def since(self, start):
+        with self._lock:
+            return [w for t, w in self.readings if t >= start]
+
+    def zero(self):
+        """SET_ZERO (command_id 8): later readings are relative to the current one."""
+        reply = self.accessor(command_id=8, command='')
+        if not reply.success:
+            raise CellError('robotiq_ft_sensor_acc refused SET_ZERO: %s' % reply.res)
+        time.sleep(0.05)  # the next reading is the zeroed one
+
+    def mean(self, seconds):
+        """The mean wrench over the next `seconds` s."""
+        start = time.monotonic()
+        time.sleep(seconds)
+        readings = self.since(start)
+        if not readings:
+            raise CellError('no robotiq_ft_wrench in %g s' % seconds)
+        return tuple(float(v) for v in np.mean(readings, axis=0))
+
+
+def force_norm(wrench):
+    return math.sqrt(sum(v * v for v in wrench[:3]))

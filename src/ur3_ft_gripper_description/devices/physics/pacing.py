@@ -1,0 +1,54 @@
+"""How well the physics cell keeps up with the wall clock (no ROS).
+
+The arm's node steps the cell at its control rate, paced by the wall clock:
+each cycle lets the time since the last one pass in the cell, at most a few
+control periods (so a stalled machine does not make the arm jump). When the
+machine cannot step the cell as fast as real time, simulated time falls
+behind: the real-time factor (simulated seconds per wall-clock second) drops
+below 1. The node publishes it on /diagnostics and warns once.
+"""
+
+import collections
+
+# The factor is measured over this many wall-clock seconds.
+WINDOW = 3.0
+# Below this over a whole window, the machine does not keep up (warned once).
+SLOW = 0.9
+
+
+class RealTimeMeter(object):
+    """The real-time factor over the last `window` seconds of (wall-clock time, simulated time) samples."""
+
+    def __init__(self, window=WINDOW, slow=SLOW):
+        self.window, self.slow = float(window), float(slow)
+        self._samples = collections.deque()
+        self._warned = False
+
+    def add(self, wall, simulated):
+        """One sample: the wall-clock time and the cell's time then (s, any origins)."""
+        samples = self._samples
+        samples.append((float(wall), float(simulated)))
+        while len(samples) > 2 and samples[-1][0] - samples[1][0] >= self.window:
+            samples.popleft()
+
+    def factor(self):
+        """Simulated over wall-clock seconds across the window; None before there are two samples."""
+        if len(self._samples) < 2:
+            return None
+        (wall0, sim0), (wall1, sim1) = self._samples[0], self._samples[-1]
+        return (sim1 - sim0) / (wall1 - wall0) if wall1 > wall0 else None
+
+    def full(self):
+        """The samples span a whole window."""
+        return len(self._samples) >= 2 and self._samples[-1][0] - self._samples[0][0] >= self.window
+
+    def slow_warning(self):
+        """The one line to warn with, the first time a whole window ran slower than `slow`; else None."""
+        factor = self.factor()
+        if self._warned or not self.full() or factor is None or factor >= self.slow:
+            return None
+        self._warned = True
+        return ('the physics cell runs at %.2f x real time over the last %g s (below %g): this machine cannot '
+                'step it as fast as the wall clock, so the simulated cell runs slower than real time; close '
+                'other programs, or use the kinematic simulation (physics:=false)'
+                % (factor, self.window, self.slow))

@@ -1,0 +1,132 @@
+"""physics:=true with bad input: one line each, and nothing half-started.
+
+- A world file with a missing mass, an unknown shape, an object inside the table:
+  `ur3_ft_gripper_bringup.launch sim:=true physics:=true world:=...` on its own rosmaster; the arm's
+  node says what is wrong in one line naming the file and the field, and, being required, ends the
+  launch.
+- MuJoCo not installed: the arm's node run with physics by a Python that has everything the
+  workspace's has but MuJoCo (a venv made here from the workspace's, its packages linked in but
+  mujoco's), against a real master with the model and the controllers loaded: one line with the
+  install command, exit status 1.
+"""
+import glob
+import os
+import subprocess
+import sys
+import sysconfig
+
+import pytest
+import rospkg
+
+from ur3_ft_gripper_description.model import description, export
+
+PACKAGE = 'ur3_ft_gripper_description'
+PACKAGE_DIR = rospkg.RosPack().get_path(PACKAGE)
+sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
+from rostest_helpers import free_port, master_pid, stop_group, wait_for  # noqa: E402
+
+TABLE = """
+table:
+  size: [1.0, 1.2, 0.04]
+  pose: [0.2, 0.0, -0.02]
+  friction: 0.5
+"""
+BAD_WORLDS = {
+    'missing_mass': (TABLE + """
+objects:
+  - name: box
+    shape: box
+    size: [0.05, 0.05, 0.1]
+    pose: [0.3, -0.15, 0.05]
+    friction: 0.5
+""", ['objects[0] (box): no mass', 'give its mass in kg']),
+    'unknown_shape': (TABLE + """
+objects:
+  - name: ball
+    shape: sphere
+    size: [0.05, 0.05, 0.05]
+    pose: [0.3, -0.15, 0.05]
+    mass: 0.1
+    friction: 0.5
+""", ["objects[0] (ball): unknown shape 'sphere'", 'use box, cylinder, mesh']),
+    'inside_the_table': (TABLE + """
+objects:
+  - name: box
+    shape: box
+    size: [0.05, 0.05, 0.1]
+    pose: [0.3, -0.15, 0.0]
+    mass: 0.3
+    friction: 0.5
+""", ['objects[0] (box) is inside the table', 'mm deep', 'raise its pose z']),
+}
+
+
+def one_line(output, words):
+    lines = [line for line in output.splitlines() if all(word in line for word in words)]
+    assert len(lines) == 1, output[-4000:]
+    assert 'Traceback' not in output, output[-4000:]
+    return lines[0]
+
+
+@pytest.mark.parametrize('case', sorted(BAD_WORLDS))
+def test_a_bad_world_file_is_one_line_and_ends_the_launch(case, tmp_path):
+    text, words = BAD_WORLDS[case]
+    world = tmp_path / 'world.yaml'
+    world.write_text(text)
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % port)
+    log_path = str(tmp_path / 'roslaunch.log')
+    with open(log_path, 'w') as log:
+        launch = subprocess.Popen(['roslaunch', '-p', str(port), PACKAGE, 'ur3_ft_gripper_bringup.launch', 'sim:=true',
+                                   'physics:=true', 'world:=%s' % world], stdout=log, stderr=subprocess.STDOUT,
+                                  env=env, start_new_session=True)
+        try:
+            wait_for(lambda: launch.poll() is not None, 'roslaunch to end when its required node stops', 120)
+        finally:
+            stop_group(launch)
+    line = one_line(open(log_path).read(), [str(world)] + words)
+    assert 'ur_hardware_interface' in line
+
+
+@pytest.fixture
+def python_without_mujoco(tmp_path):
+    """A Python with the workspace's packages but MuJoCo's: a venv whose site-packages links the others in."""
+    venv = tmp_path / 'venv'
+    subprocess.run([sys.executable, '-m', 'venv', '--system-site-packages', '--without-pip', str(venv)], check=True)
+    python = str(venv / 'bin' / 'python3')
+    target = subprocess.run([python, '-c', 'import sysconfig; print(sysconfig.get_paths()["purelib"])'],
+                            stdout=subprocess.PIPE, universal_newlines=True, check=True).stdout.strip()
+    for entry in glob.glob(os.path.join(sysconfig.get_paths()['purelib'], '*')):
+        name = os.path.basename(entry)
+        if not name.lower().startswith('mujoco') and not os.path.exists(os.path.join(target, name)):
+            os.symlink(entry, os.path.join(target, name))
+    check = subprocess.run([python, '-c', 'import numpy, rospy, trimesh, urdf_parser_py; import mujoco'],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+    assert check.returncode != 0 and "No module named 'mujoco'" in check.stderr, check.stderr
+    return python
+
+
+def test_physics_without_mujoco_is_one_line_with_the_install_command(python_without_mujoco, tmp_path):
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % port)
+    master = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+    try:
+        wait_for(lambda: master_pid(env['ROS_MASTER_URI']), 'rosmaster on port %d' % port, 30)
+        import xmlrpc.client
+        api = xmlrpc.client.ServerProxy(env['ROS_MASTER_URI'])
+        urdf = description.to_xml(description.expand_model(export.model_mappings()))
+        api.setParam('/test', '/robot_description', urdf)
+        config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', 'ur3_controllers.yaml')
+        subprocess.run(['rosparam', 'load', config], env=env, check=True, timeout=60)
+        node = subprocess.run(
+            [python_without_mujoco, os.path.join(PACKAGE_DIR, 'scripts', 'ur_arm_sim'), '__name:=ur_hardware_interface',
+             '_physics:=true', '_ur_type:=ur3', '_controller_config_file:=%s' % config,
+             '_controllers:=joint_state_controller scaled_pos_joint_traj_controller'],
+            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=120)
+    finally:
+        stop_group(master)
+    assert node.returncode == 1, node.stdout[-3000:]
+    line = one_line(node.stdout, ['physics needs MuJoCo'])
+    assert 'pip install mujoco' in line and 'python3-mujoco-pip' in line, line
+    assert '[FATAL]' in line

@@ -1,0 +1,91 @@
+"""The 2F-140's register machine (gripper_sim.RegisterGripper) on the physics cell's fingers, through the link.
+
+The cell steps in a thread as the arm's node steps it; the register machine runs as the gripper's
+node runs it, over PhysicsFingers and a real CellClient. Known truths: the object's width through the
+register scale of config/sim_devices.yaml, and the status codes of the manual (section 4.4).
+"""
+import time
+
+import pytest
+
+from conftest import START, Served
+from ur3_ft_gripper_description.devices import gripper_sim
+from ur3_ft_gripper_description.devices.physics.link import CellClient
+
+PERIOD = 0.02  # the gripper node's 50 Hz
+
+
+@pytest.fixture
+def registers(make_cell, between_pads, tmp_path):
+    """registers(world text) -> a RegisterGripper on that cell's fingers."""
+    made = []
+
+    def make(world):
+        served = Served(make_cell(world, START), str(tmp_path / ('cell%d.sock' % len(made))))
+        made.append(served)
+        spec = gripper_sim.spec_from_params(lambda name, default=None: default)
+        fingers = gripper_sim.PhysicsFingers(CellClient(served.server.path), spec)
+        return gripper_sim.RegisterGripper(spec, lambda text: None, fingers=fingers)
+    yield make
+    for served in made:
+        served.close()
+
+
+def command(gripper, **registers):
+    values = dict.fromkeys(gripper_sim.COMMAND_FIELDS, 0)
+    values.update(registers)
+    gripper.set_command(values)
+
+
+def run_until(gripper, condition, seconds=10.0):
+    """Advance at the node's rate until condition(status); the status."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        gripper.advance(PERIOD)
+        status = gripper.status()
+        if condition(status):
+            return status
+        time.sleep(PERIOD)
+    raise AssertionError('not within %g s: %s' % (seconds, gripper.status()))
+
+
+def activate(gripper):
+    command(gripper, rACT=1, rGTO=1, rPR=0, rSP=255, rFR=150)
+    return run_until(gripper, lambda s: s['gSTA'] == 3 and s['gOBJ'] == 3)
+
+
+def test_closing_on_an_object_reads_gobj_2_at_its_width_and_opening_reads_3(registers, between_pads):
+    gripper = registers(between_pads(0.05, mass=0.3))
+    opened = activate(gripper)
+    assert opened['gPO'] == 3  # the model's open end reads as the request: fully open
+    command(gripper, rACT=1, rGTO=1, rPR=255, rSP=128, rFR=150)
+    assert run_until(gripper, lambda s: s['gOBJ'] != 3)['gOBJ'] == 0  # moving
+    held = run_until(gripper, lambda s: s['gOBJ'] != 0)
+    scale = gripper.spec.scale
+    assert held['gOBJ'] == 2 and abs(held['gPO'] - scale.position(0.05)) <= 2, held
+    assert held['gCU'] == pytest.approx(gripper.spec.max_grip_current * (10 + 115 * 150 / 255.0) / 125.0, abs=2)
+    command(gripper, rACT=1, rGTO=1, rPR=0, rSP=255, rFR=150)
+    assert run_until(gripper, lambda s: s['gOBJ'] != 0 and s['gPR'] == 0) == dict(
+        gACT=1, gGTO=1, gSTA=3, gOBJ=3, gFLT=0, gPR=0, gPO=3, gCU=0)
+
+
+def test_closing_on_nothing_ends_at_the_request(registers):
+    gripper = registers('')
+    activate(gripper)
+    command(gripper, rACT=1, rGTO=1, rPR=255, rSP=255, rFR=50)
+    closed = run_until(gripper, lambda s: s['gOBJ'] != 0 and s['gPR'] == 255)
+    assert (closed['gOBJ'], closed['gPO']) == (3, int(gripper.spec.gpo_closed))
+    command(gripper, rACT=1, rGTO=1, rPR=100, rSP=255, rFR=50)
+    assert run_until(gripper, lambda s: s['gOBJ'] != 0 and s['gPR'] == 100)['gPO'] == 100
+
+
+def test_stopping_holds_the_fingers_where_they_are(registers):
+    gripper = registers('')
+    activate(gripper)
+    command(gripper, rACT=1, rGTO=1, rPR=255, rSP=0, rFR=50)
+    run_until(gripper, lambda s: s['gPO'] > 60)
+    command(gripper, rACT=1, rGTO=0, rPR=255, rSP=0, rFR=50)
+    stopped = run_until(gripper, lambda s: s['gGTO'] == 0)
+    time.sleep(0.5)
+    gripper.advance(0.5)
+    assert gripper.status()['gPO'] == stopped['gPO'] and stopped['gPO'] < 230
