@@ -1,11 +1,11 @@
-"""The simulated arm's settings: its node's parameters and the model, checked, without ROS.
+"""The simulated UR controller's settings (node ur_hardware_interface): its parameters and the model, checked.
 
 The node (ur_hardware_interface) declares its private parameters in
 PARAMETERS here, ~physics and ~world_file with the physics cell's
 (physics/arm_cell.py); their reference is doc/node_parameters.md. Read
 through `get_param(name, default)` (rospy.get_param on the node, a dict in
-tests). What a user can get wrong is one ParamError line naming the
-parameter and what it must be.
+tests); no ROS needed. What a user can get wrong is one ParamError line
+naming the parameter and what it must be.
 """
 
 import math
@@ -51,8 +51,9 @@ PARAMETERS = (
     sim_params.Param('~stopped_controllers', '', 'Controllers loaded but not started, separated by spaces; '
                      'empty: every other simulated controller of the configuration', words),
     sim_params.Param('~initial_positions', [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0],
-                     'The six joint positions at start-up (rad), within the model\'s limits; the default, elbow '
-                     'bent and tool pointing down, is away from the singularities of the stretched arm'),
+                     'The six joint positions at start-up (rad), within the model\'s limits; the default '
+                     '(0, -pi/2, pi/2, -pi/2, -pi/2, 0): elbow bent and tool pointing down, away from the '
+                     'singularities of the stretched arm'),
     sim_params.Param('~servoj_lookahead_time', 0.03, "As ur_robot_driver's: the joints follow their commands with "
                      'this time constant (s); 0: at once', sim_params.number(minimum=0.0)),
     sim_params.Param('~robot_mode', 'RUNNING', 'Robot mode at start-up: POWER_OFF, IDLE or RUNNING',
