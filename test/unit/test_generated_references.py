@@ -26,6 +26,7 @@ def test_the_generated_pages_are_up_to_date():
 def test_a_stale_reference_fails_and_names_the_command_that_regenerates_it(tmp_path):
     stale = tmp_path / 'launch_reference.md'
     stale.write_text(open(REFERENCE).read().replace('Mount the 2F-140', 'Mount a 2F-85', 1))
+    shutil.copy(os.path.join(PACKAGE_DIR, 'doc', 'node_parameters.md'), str(tmp_path))  # the other page: current
     run = generate('--check', '--doc-dir', str(tmp_path))
     assert run.returncode == 1
     assert run.stderr.splitlines()[-1] == (
@@ -81,16 +82,37 @@ def test_header_comment_and_args_render_in_order(tmp_path):
 
 
 def test_a_node_parameter_table_renders_as_a_page(tmp_path):
-    # The form a node's declaration table takes (doc: node_parameters.md once the nodes declare one).
+    # The form a node's declaration table takes (sim_params.Param's fields; a dict serves as well).
     (tmp_path / 'declared.py').write_text(
+        '"""A gripper. Its second sentence is not shown."""\n'
+        'class AtStartup(object):\n    shown = "`gpo_open` of ~devices_file"\n'
         "PARAMETERS = [{'name': '~rate', 'default': 50.0, 'doc': 'status rate (Hz)'},\n"
-        "              {'name': '~object_width', 'default': None, 'doc': 'm between the pads | closing stops'}]\n")
+        "              {'name': '~object_width', 'default': None, 'doc': 'm between the pads | closing stops'},\n"
+        "              {'name': '~physics', 'default': False, 'doc': 'on physics'},\n"
+        "              {'name': '~initial_position', 'default': AtStartup(), 'doc': 'gPO at start-up'}]\n")
     env = dict(os.environ, PYTHONPATH=str(tmp_path) + os.pathsep + os.environ.get('PYTHONPATH', ''))
     run = subprocess.run([sys.executable, GENERATOR, '--doc-dir', str(tmp_path), '--node-table',
-                          'robotiq2FGripper (gripper_sim)=declared:PARAMETERS'], env=env, stdout=subprocess.PIPE,
+                          'robotiq2FGripper=declared:PARAMETERS'], env=env, stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, universal_newlines=True, timeout=60)
     assert run.returncode == 0, run.stderr
     page = (tmp_path / 'node_parameters.md').read_text()
-    assert page.split('## robotiq2FGripper (gripper_sim)\n')[1].strip().splitlines() == [
+    assert page.split('## robotiq2FGripper\n')[1].strip().splitlines() == [
+        'A gripper. Its second sentence is not shown.', '', 'Declared in `declared` (`PARAMETERS`).', '',
         '| parameter | default | meaning |', '| --- | --- | --- |', '| `~rate` | `50.0` | status rate (Hz) |',
-        '| `~object_width` | (unset) | m between the pads \\| closing stops |']
+        '| `~object_width` | (unset) | m between the pads \\| closing stops |',
+        '| `~physics` | `false` | on physics |',
+        '| `~initial_position` | `gpo_open` of ~devices_file | gPO at start-up |']
+
+
+def test_a_stale_node_parameter_page_fails(tmp_path):
+    # A changed declaration (here: the page edited by hand instead) is caught like a stale launch reference.
+    for name in ('launch_reference.md', 'node_parameters.md'):
+        shutil.copy(os.path.join(PACKAGE_DIR, 'doc', name), str(tmp_path / name))
+    assert generate('--check', '--doc-dir', str(tmp_path)).returncode == 0
+    page = tmp_path / 'node_parameters.md'
+    page.write_text(page.read_text().replace('| `~max_pose_age` | `0.5` |', '| `~max_pose_age` | `1.0` |', 1))
+    run = generate('--check', '--doc-dir', str(tmp_path))
+    assert run.returncode == 1
+    assert run.stderr.splitlines()[-1] == (
+        'generate_references: doc/node_parameters.md is stale: run `%s`' % REGENERATE), run.stderr
+    assert '+| `~max_pose_age` | `0.5` |' in run.stderr, 'the diff shows what changed'

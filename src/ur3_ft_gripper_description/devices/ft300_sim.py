@@ -7,8 +7,7 @@ publishes, at the sensor's 100 Hz, ``robotiq_ft_sensor``
 device's resolution (its stream carries 16-bit counts of 0.01 N and
 0.001 Nm, which rq_sensor turns into float32), and serves
 ``robotiq_ft_sensor_acc`` (robotiq_ft_sensor/sensor_accessor) with
-rq_sensor's answers (``accessor_reply``). ``~serial_id`` and
-``~max_retries`` are accepted, as a launch file for the real sensor sets them.
+rq_sensor's answers (``accessor_reply``).
 
 The reading is what the real sensor shows when nothing touches the tool:
 the weight of the gripper (and of a held object) for the current pose,
@@ -17,18 +16,9 @@ gripper's mass and centre of mass are the model's own: the inertials of
 every link below ``~frame_id`` in ``robot_description`` (fingers open;
 looked for up the namespaces, like ``rospy.search_param``).
 
-Private parameters (defaults from config/sim_devices.yaml):
-  ~prefix          '' ; prefix of the model's frames (default frames follow it)
-  ~frame_id        <prefix>robotiq_ft_frame_id ; header.frame_id, the sensor frame
-  ~gravity_frame   <prefix>base_link ; gravity points along its -z
-  ~rate            100 Hz (the real sensor's stream rate)
-  ~noise_force     0.1 N, ~noise_torque 0.005 Nm (standard deviations; 0 = none)
-  ~payload_mass    0 kg ; ~payload_com [0, 0, 0] m in the sensor frame: a held object,
-                   added to what the model hangs below the sensor
-  ~devices_file    config/sim_devices.yaml (the sensor's noise, rate and identity)
-  ~max_pose_age    0.5 s ; a pose older than this is stale (robot_state_publisher
-                   stopped?): nothing is published until it is fresh again
-  ~serial_id, ~max_retries  rq_sensor's (serial device, reconnection tries): accepted, unused
+Its private parameters are declared in PARAMETERS below (their reference:
+doc/node_parameters.md). ``~serial_id`` and ``~max_retries`` are rq_sensor's:
+accepted, as a launch file for the real sensor sets them, and unused.
 
 Until the pose is known the node waits, warns once and publishes nothing; it
 never publishes a wrench for a pose it does not know.
@@ -50,6 +40,31 @@ from ur3_ft_gripper_description.devices import node_loop, sim_params, wrench_mod
 from ur3_ft_gripper_description.model import inertials
 
 
+PARAMETERS = (
+    sim_params.PREFIX,
+    sim_params.Param('~frame_id', sim_params.StartupDefault('~prefix + the sensor\'s `frame_id` in ~devices_file'),
+                     'header.frame_id of the readings: the sensor frame', sim_params.frame),
+    sim_params.Param('~gravity_frame', sim_params.StartupDefault('~prefix + `base_link`'),
+                     'Gravity points along its -z', sim_params.frame),
+    sim_params.Param('~rate', sim_params.StartupDefault('the sensor\'s `rate` in ~devices_file (its stream rate)'),
+                     'Publishing rate (Hz)', sim_params.number(strictly_above=0.0)),
+    sim_params.Param('~noise_force', sim_params.StartupDefault('the sensor\'s `noise_force` in ~devices_file'),
+                     'Standard deviation of the force noise (N); 0: none', sim_params.number(minimum=0.0)),
+    sim_params.Param('~noise_torque', sim_params.StartupDefault('the sensor\'s `noise_torque` in ~devices_file'),
+                     'Standard deviation of the torque noise (Nm); 0: none', sim_params.number(minimum=0.0)),
+    sim_params.Param('~payload_mass', 0.0, 'Mass of a held object (kg), added to what the model hangs below the '
+                     'sensor; not with ~physics, which weighs what the gripper holds', sim_params.number(minimum=0.0)),
+    sim_params.Param('~payload_com', [0.0, 0.0, 0.0], 'Centre of mass of the held object (m, x y z in the sensor '
+                     'frame), a list or a string like "0 0 0.1"', sim_params.vector3),
+    sim_params.DEVICES_FILE,
+    sim_params.Param('~max_pose_age', 0.5, 'A sensor pose older than this (s) is stale (robot_state_publisher '
+                     'stopped?): nothing is published until it is fresh again', sim_params.number(strictly_above=0.0)),
+    sim_params.PHYSICS,
+    sim_params.Param('~serial_id', '', "rq_sensor's serial device: accepted, unused (said once if set)"),
+    sim_params.Param('~max_retries', 100, "rq_sensor's reconnection tries: accepted, unused"),
+)
+
+
 @dataclasses.dataclass
 class FT300Settings(object):
     frame_id: str
@@ -64,21 +79,23 @@ class FT300Settings(object):
     @classmethod
     def from_params(cls, get_param):
         """Settings from private parameters (``get_param(name, default)``); ParamError if bad."""
-        sensor = sim_params.from_devices_file(get_param, wrench_model.load_sensor_spec)
-        prefix = sim_params.prefix(get_param)
-        frame_id = sim_params.frame(get_param, '~frame_id', prefix + sensor.frame_id)
+        def param(name, **default):
+            return sim_params.read(get_param, PARAMETERS, name, **default)
+        sensor = sim_params.from_devices_file(get_param, PARAMETERS, wrench_model.load_sensor_spec)
+        prefix = param('~prefix')
+        frame_id = param('~frame_id', default=prefix + sensor.frame_id)
         below_sensor = wrench_model.Load(*tool_side_load(get_param('robot_description', None), frame_id))
-        object_mass = sim_params.number(get_param, '~payload_mass', 0.0, minimum=0.0)
-        object_com = sim_params.vector3(get_param, '~payload_com', [0.0, 0.0, 0.0])
+        object_mass = param('~payload_mass')
+        object_com = param('~payload_com')
         return cls(
             frame_id=frame_id,
-            gravity_frame=sim_params.frame(get_param, '~gravity_frame', prefix + 'base_link'),
-            rate=sim_params.number(get_param, '~rate', sensor.rate, strictly_above=0.0),
-            noise_force=sim_params.number(get_param, '~noise_force', sensor.noise_force, minimum=0.0),
-            noise_torque=sim_params.number(get_param, '~noise_torque', sensor.noise_torque, minimum=0.0),
+            gravity_frame=param('~gravity_frame', default=prefix + 'base_link'),
+            rate=param('~rate', default=sensor.rate),
+            noise_force=param('~noise_force', default=sensor.noise_force),
+            noise_torque=param('~noise_torque', default=sensor.noise_torque),
             load=below_sensor.with_object(object_mass, object_com),
             identity=sensor.identity,
-            max_pose_age=sim_params.number(get_param, '~max_pose_age', 0.5, strictly_above=0.0))
+            max_pose_age=param('~max_pose_age'))
 
 
 def tool_side_load(description, frame_id):
@@ -290,12 +307,12 @@ def run(rospy):
     except sim_params.ParamError as exc:
         rospy.logfatal('ft300_sim: bad parameter %s', exc)
         return 1
-    physics = bool(rospy.get_param('~physics', False))
-    if physics and rospy.get_param('~payload_mass', 0.0):
+    physics = sim_params.read(rospy.get_param, PARAMETERS, '~physics')
+    if physics and sim_params.read(rospy.get_param, PARAMETERS, '~payload_mass'):
         rospy.logwarn('ft300_sim: ~payload_mass is not used with ~physics: the sensor weighs what the gripper holds')
     # Read as rq_sensor reads them; there is no serial device to open or retry.
-    serial_id = rospy.get_param('~serial_id', '')
-    rospy.get_param('~max_retries', 100)
+    serial_id = sim_params.read(rospy.get_param, PARAMETERS, '~serial_id')
+    sim_params.read(rospy.get_param, PARAMETERS, '~max_retries')
     if serial_id:
         rospy.loginfo('ft300_sim: ~serial_id %s is not used: this sensor is simulated', serial_id)
     sensor = SensorModel(settings)

@@ -15,22 +15,30 @@ gPO -> opening -> angle:
     from ``robot_description``), so the pads in TF are that far apart. The
     model's pads open only ~0.1285 m: any wider opening shows as 0 rad.
 
-Private parameters:
-  ~prefix        ''  ; the model's joint prefix
-  ~gpo_open      gPO of this unit fully open  (default from ~devices_file)
-  ~gpo_closed    gPO of this unit fully closed (default from ~devices_file)
-  ~devices_file  config/sim_devices.yaml
+Its private parameters are declared in PARAMETERS below (their reference:
+doc/node_parameters.md).
 """
 
 from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 
 
+PARAMETERS = (
+    sim_params.PREFIX,
+    sim_params.Param('~gpo_open', sim_params.StartupDefault('the gripper\'s `gpo_open` in ~devices_file'),
+                     'gPO of this unit fully open (the full stroke); measure yours (config/sim_devices.yaml says '
+                     'how)', sim_params.number(minimum=0.0)),
+    sim_params.Param('~gpo_closed', sim_params.StartupDefault('the gripper\'s `gpo_closed` in ~devices_file'),
+                     'gPO of this unit fully closed (0 m)', sim_params.number(minimum=0.0)),
+    sim_params.DEVICES_FILE,
+)
+
+
 def scale_from_params(get_param):
     """The unit's RegisterScale from ~gpo_open, ~gpo_closed and ~devices_file; ParamError if bad."""
-    spec = sim_params.from_devices_file(get_param, lambda path: gripper_model.load_gripper_spec(
+    spec = sim_params.from_devices_file(get_param, PARAMETERS, lambda path: gripper_model.load_gripper_spec(
         path, ('stroke', 'gpo_open', 'gpo_closed')))
-    gpo_open = sim_params.number(get_param, '~gpo_open', spec['gpo_open'], minimum=0.0)
-    gpo_closed = sim_params.number(get_param, '~gpo_closed', spec['gpo_closed'], minimum=0.0)
+    gpo_open = sim_params.read(get_param, PARAMETERS, '~gpo_open', default=spec['gpo_open'])
+    gpo_closed = sim_params.read(get_param, PARAMETERS, '~gpo_closed', default=spec['gpo_closed'])
     if not gpo_open < gpo_closed <= 255:
         raise sim_params.ParamError('~gpo_open=%g, ~gpo_closed=%g: need 0 <= gpo_open < gpo_closed '
                                     '<= 255 (gPO of this unit fully open, fully closed)'
@@ -56,7 +64,7 @@ def run(rospy):
 
     name = rospy.get_name()
     try:
-        prefix = sim_params.prefix(rospy.get_param)
+        prefix = sim_params.read(rospy.get_param, PARAMETERS, '~prefix')
         scale = scale_from_params(rospy.get_param)
     except sim_params.ParamError as exc:
         rospy.logfatal('%s: bad parameter %s', name, exc)

@@ -49,12 +49,8 @@ above is the same for both:
   fingers stopping short of the request on an object, gCU follows the drive's
   force (max_grip_current at 125 N).
 
-Private parameters (defaults from ``gripper`` in config/sim_devices.yaml):
-  ~rate             50 Hz, status publishing rate
-  ~object_width     unset ; m between the pads: closing stops there (gOBJ 2); not with ~physics
-  ~initial_position gpo_open ; gPO at start-up (in reset, like a power-up); not with ~physics
-  ~physics          false ; true: the physics cell's fingers
-  ~devices_file     config/sim_devices.yaml
+Its private parameters are declared in PARAMETERS below (their reference:
+doc/node_parameters.md).
 """
 
 import math
@@ -334,22 +330,34 @@ class RegisterGripper(object):
             gCU=int(round(current)))
 
 
+PARAMETERS = (
+    sim_params.Param('~rate', 50.0, 'Status publishing rate (Hz) on Robotiq2FGripperRobotInput',
+                     sim_params.number(strictly_above=0.0)),
+    sim_params.Param('~object_width', None, 'Width (m) of a part between the pads: closing stops on it (gOBJ 2); '
+                     'unset: none; not with ~physics, where the fingers stop on the world\'s objects',
+                     sim_params.unset_or(sim_params.number(minimum=0.0))),
+    sim_params.Param('~initial_position', sim_params.StartupDefault('the gripper\'s `gpo_open` in ~devices_file'),
+                     'gPO at start-up, in reset as after a power-up; not with ~physics',
+                     sim_params.number(minimum=0.0)),
+    sim_params.PHYSICS,
+    sim_params.DEVICES_FILE,
+)
+
+
 def spec_from_params(get_param):
-    return sim_params.from_devices_file(get_param, lambda path: GripperSpec(
+    return sim_params.from_devices_file(get_param, PARAMETERS, lambda path: GripperSpec(
         gripper_model.load_gripper_spec(path, GripperSpec.KEYS)))
 
 
 def settings_from_params(get_param):
     """(spec, rate, object_width, initial_position) from private parameters; ParamError if bad."""
     spec = spec_from_params(get_param)
-    rate = sim_params.number(get_param, '~rate', 50.0, strictly_above=0.0)
-    width = get_param('~object_width', None)
-    if width is not None:
-        width = sim_params.number(get_param, '~object_width', None, minimum=0.0)
-        if width > spec.stroke:
-            raise sim_params.ParamError('~object_width=%r m is wider than the %g m stroke: the '
-                                        'gripper could not hold it' % (width, spec.stroke))
-    initial = sim_params.number(get_param, '~initial_position', spec.gpo_open, minimum=0.0)
+    rate = sim_params.read(get_param, PARAMETERS, '~rate')
+    width = sim_params.read(get_param, PARAMETERS, '~object_width')
+    if width is not None and width > spec.stroke:
+        raise sim_params.ParamError('~object_width=%r m is wider than the %g m stroke: the '
+                                    'gripper could not hold it' % (width, spec.stroke))
+    initial = sim_params.read(get_param, PARAMETERS, '~initial_position', default=spec.gpo_open)
     if initial > 255:
         raise sim_params.ParamError('~initial_position=%r must be a position register value '
                                     '0..255' % (initial,))
@@ -367,7 +375,7 @@ def run(rospy):
         rospy.logfatal('gripper_sim: bad parameter %s', exc)
         return 1
     fingers, lost = None, []
-    if rospy.get_param('~physics', False):
+    if sim_params.read(rospy.get_param, PARAMETERS, '~physics'):
         if width is not None:
             rospy.logwarn('gripper_sim: ~object_width is not used with ~physics: the fingers stop on the '
                           "world's objects")

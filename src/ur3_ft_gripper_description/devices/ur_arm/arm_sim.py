@@ -59,7 +59,7 @@ from . import cartesian
 from . import core as arm_core
 from . import joints
 from .dashboard import DashboardServices
-from .settings import read_settings
+from .settings import PARAMETERS, read_settings
 from .trajectory import GoalError, JointTolerance, Point
 
 NODE = link.ARM_NODE
@@ -75,7 +75,7 @@ class ArmSim(object):
         settings = read_settings(get_param)
         self.prefix, self.loop_hz = settings.prefix, settings.loop_hz
         self.physics = None
-        if get_param('~physics', False):
+        if sim_params.read(get_param, PARAMETERS, '~physics'):
             self.physics = PhysicsCell(rospy, get_param, settings, self.lock)
             motion = self.physics.motion
         else:

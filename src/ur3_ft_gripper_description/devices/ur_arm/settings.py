@@ -1,8 +1,11 @@
-"""The simulated arm's settings: its node's parameters and the model, checked, without ROS.
+"""The simulated UR controller's settings (node ur_hardware_interface): its parameters and the model, checked.
 
-Read through `get_param(name, default)` (rospy.get_param on the node, a dict
-in tests). What a user can get wrong is one ParamError line naming the
-parameter and what it must be.
+The node (ur_hardware_interface) declares its private parameters in
+PARAMETERS here, ~physics and ~world_file with the physics cell's
+(physics/arm_cell.py); their reference is doc/node_parameters.md. Read
+through `get_param(name, default)` (rospy.get_param on the node, a dict in
+tests); no ROS needed. What a user can get wrong is one ParamError line
+naming the parameter and what it must be.
 """
 
 import math
@@ -10,10 +13,56 @@ import math
 import numpy as np
 
 from .. import sim_params
+from ..physics import arm_cell
 from . import controller_manager as cm
 from . import robot_state as rs
 from . import software
 from .arm_kinematics import ArmKinematics
+
+
+def ur_model_name(name, value):
+    if not isinstance(value, str) or not value:
+        raise sim_params.ParamError('%s=%r must be a UR model name, e.g. ur5e' % (name, value))
+    return value
+
+
+def selectable_mode(name, value):
+    if value not in rs.SELECTABLE_MODES:
+        raise sim_params.ParamError('%s=%r: use POWER_OFF, IDLE or RUNNING' % (name, value))
+    return value
+
+
+def words(name, value):
+    """Names separated by spaces; empty: none."""
+    return str(value).split() if value else []
+
+
+PARAMETERS = (
+    sim_params.PREFIX,
+    sim_params.Param('~ur_type', 'ur5e', 'UR model (ur3, ur5e, ...): its software version and CB3 or e-Series '
+                     'behaviour', ur_model_name),
+    sim_params.Param('~controller_config_file', None, "ur_robot_driver's controller configuration "
+                     '(config/<ur_type>_controllers.yaml): the controllers, their joints and loop_hz; required',
+                     sim_params.existing_file),
+    sim_params.Param('~loop_hz', sim_params.StartupDefault('`hardware_control_loop/loop_hz` of '
+                                                           '~controller_config_file, else 125'),
+                     'Control loop and joint_states rate (Hz)', sim_params.number(strictly_above=0.0)),
+    sim_params.Param('~controllers', '', 'Controllers started at start-up, separated by spaces', words),
+    sim_params.Param('~stopped_controllers', '', 'Controllers loaded but not started, separated by spaces; '
+                     'empty: every other simulated controller of the configuration', words),
+    sim_params.Param('~initial_positions', [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0],
+                     'The six joint positions at start-up (rad), within the model\'s limits; the default '
+                     '(0, -pi/2, pi/2, -pi/2, -pi/2, 0): elbow bent and tool pointing down, away from the '
+                     'singularities of the stretched arm'),
+    sim_params.Param('~servoj_lookahead_time', 0.03, "As ur_robot_driver's: the joints follow their commands with "
+                     'this time constant (s); 0: at once', sim_params.number(minimum=0.0)),
+    sim_params.Param('~robot_mode', 'RUNNING', 'Robot mode at start-up: POWER_OFF, IDLE or RUNNING',
+                     selectable_mode),
+    sim_params.Param('~program_running', True, 'The external control program runs at start-up (in RUNNING)',
+                     sim_params.flag),
+    sim_params.Param('~headless_mode', False, "As ur_robot_driver's: resend_robot_program starts the program "
+                     '(true) or dashboard play does (false)', sim_params.flag),
+) + arm_cell.PARAMETERS
 
 
 class Settings(object):
@@ -22,29 +71,27 @@ class Settings(object):
 
 def read_settings(get_param):
     """Settings from `get_param(name, default)` (rospy.get_param, or a dict in tests); ParamError on bad input."""
+    def param(name, **default):
+        return sim_params.read(get_param, PARAMETERS, name, **default)
     settings = Settings()
-    settings.prefix = sim_params.prefix(get_param)
-    ur_type = get_param('~ur_type', 'ur5e')
-    if not isinstance(ur_type, str) or not ur_type:
-        raise sim_params.ParamError('~ur_type=%r must be a UR model name, e.g. ur5e' % (ur_type,))
-    settings.ur_type = ur_type
+    settings.prefix = param('~prefix')
+    ur_type = settings.ur_type = param('~ur_type')
     try:
         settings.software = software.for_model(ur_type)
     except software.UnknownModel as exc:
         raise sim_params.ParamError('~ur_type: %s' % exc)
-    config_file = sim_params.existing_file(get_param, '~controller_config_file', None)
+    config_file = param('~controller_config_file')
     try:
         config = cm.read_config(config_file)
         sections, joints = cm.controller_sections(config)
         config_hz = float(config.get('hardware_control_loop', {}).get('loop_hz', 125))
-        settings.loop_hz = sim_params.number(get_param, '~loop_hz', config_hz, strictly_above=0.0)
+        settings.loop_hz = param('~loop_hz', default=config_hz)
     except cm.ControllerConfigError as exc:
         raise sim_params.ParamError('~controller_config_file: %s' % exc)
     settings.joints = [name if name.startswith(settings.prefix) else settings.prefix + name for name in joints]
-    started = str(get_param('~controllers', '')).split()
-    stopped = get_param('~stopped_controllers', '')
-    stopped = str(stopped).split() if stopped else [n for n in sections if n not in started and
-                                                    sections[n]['type'] in cm.SIMULATED_TYPES]
+    started = param('~controllers')
+    stopped = param('~stopped_controllers') or [n for n in sections if n not in started and
+                                                 sections[n]['type'] in cm.SIMULATED_TYPES]
     try:
         settings.manager = cm.ControllerManager(sections, settings.joints, started, stopped)
     except cm.ControllerConfigError as exc:
@@ -57,22 +104,18 @@ def read_settings(get_param):
                                      settings.prefix + 'tool0')
     except (ValueError, KeyError) as exc:
         raise sim_params.ParamError('robot_description: %s (is ~prefix %r the model\'s?)' % (exc, settings.prefix))
-    # Elbow bent, tool pointing down: away from the singularities of the stretched arm.
-    initial = get_param('~initial_positions', [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2, 0.0])
+    given = param('~initial_positions')
     try:
-        initial = np.array(initial, dtype=float)
+        initial = np.array(given, dtype=float)
     except (TypeError, ValueError):
         initial = np.array([])
     if initial.shape != (6,) or not np.all(np.isfinite(initial)) or np.any(initial < settings.arm.lower) or \
             np.any(initial > settings.arm.upper):
         raise sim_params.ParamError('~initial_positions=%r must be six finite joint positions within the '
-                                    'model\'s limits (rad)' % (get_param('~initial_positions', None),))
+                                    'model\'s limits (rad)' % (given,))
     settings.initial = initial
-    settings.servo_lag = sim_params.number(get_param, '~servoj_lookahead_time', 0.03, minimum=0.0)
-    mode = get_param('~robot_mode', 'RUNNING')
-    if mode not in rs.SELECTABLE_MODES:
-        raise sim_params.ParamError('~robot_mode=%r: use POWER_OFF, IDLE or RUNNING' % (mode,))
-    settings.robot = rs.RobotState(settings.software, robot_mode=mode,
-                                   program_running=bool(get_param('~program_running', True)),
-                                   headless=bool(get_param('~headless_mode', False)))
+    settings.servo_lag = param('~servoj_lookahead_time')
+    mode = param('~robot_mode')
+    settings.robot = rs.RobotState(settings.software, robot_mode=mode, program_running=param('~program_running'),
+                                   headless=param('~headless_mode'))
     return settings
