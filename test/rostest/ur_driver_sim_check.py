@@ -34,11 +34,11 @@ from ur_dashboard_msgs.srv import GetLoadedProgram, GetProgramState, GetRobotMod
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSliderFraction
 
-import rostest_helpers
-from rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
 from ur3_ft_gripper_description.model.names import PADS
+from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for
 
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
           'wrist_3_joint']
