@@ -46,7 +46,7 @@ def sys_path_changes(path):
             for target in targets:
                 if is_sys_path(target) or (isinstance(target, ast.Subscript) and is_sys_path(target.value)):
                     lines.append(node.lineno)
-    return lines
+    return sorted(lines)
 
 
 def top_level_imports(path):
