@@ -88,6 +88,16 @@ def test_the_helpers_modules_are_imported_through_their_package():
     assert not bare, 'import these as %s.<module>: %s' % (HELPERS, ', '.join(bare))
 
 
+def test_no_file_imports_a_rostest_node_as_a_module():
+    # Only a sys.path insert made them importable; what they share belongs in the helpers' package.
+    nodes = {name[:-len('.py')] for name in os.listdir(os.path.join(PACKAGE_DIR, 'test', 'rostest'))
+             if name.endswith('.py')}
+    assert 'ur_driver_sim_check' in nodes
+    found = ['%s:%d imports %s' % (os.path.relpath(path, PACKAGE_DIR), line, module)
+             for path in python_files(*SCANNED) for line, module in top_level_imports(path) if module in nodes]
+    assert not found, 'move what these use into %s: %s' % (HELPERS, ', '.join(found))
+
+
 def test_the_helpers_package_resolves_to_its_folder_in_the_source():
     # find_spec imports the package (the devel space's relay) but not the module.
     spec = importlib.util.find_spec(HELPERS + '.rostest_helpers')
