@@ -14,13 +14,11 @@ sim_arm.launch with the bare arm's model, then:
   far from its goal the arm ends.
 Figures, not pass/fail: exit status 0 when every measurement ran.
 """
-import os
 import sys
 import threading
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import benchlib  # noqa: E402
+import benchlib  # this folder is the script's, first on sys.path
 
 HOME = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',

@@ -12,13 +12,13 @@ import subprocess
 import sys
 import xmlrpc.client
 
+# Free ports, masters, stopping processes and waiting: the tests' helpers, one home for both.
+from ur3_ft_gripper_testing.rostest_helpers import (  # noqa: F401
+    free_port, master_pid, stop_group, wait_for, wait_for_result)
+
 BENCH_DIR = os.path.dirname(os.path.abspath(__file__))
 PACKAGE_DIR = os.path.dirname(BENCH_DIR)
 CLK_TCK = os.sysconf('SC_CLK_TCK')
-
-# Free ports, masters, stopping processes and waiting: the tests' helpers, one home for both.
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-from rostest_helpers import free_port, master_pid, stop_group, wait_for, wait_for_result  # noqa: E402,F401
 
 # Every process started here leads a session of its own, and is stopped with its whole group:
 # SIGINT first (what roslaunch and rospy expect), then SIGKILL for whatever is left, e.g. the

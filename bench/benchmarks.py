@@ -17,8 +17,7 @@ import threading
 import time
 import xml.dom.minidom
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import benchlib  # noqa: E402
+import benchlib  # this folder is the script's, first on sys.path
 
 PACKAGE = 'ur3_ft_gripper_description'
 GOALS = {'expansion': 1.25, 'bringup': 1.15}

@@ -18,8 +18,7 @@ import sys
 import threading
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import benchlib  # noqa: E402
+import benchlib  # this folder is the script's, first on sys.path
 
 HOME = [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0]
 AWAY = [0.5, -1.4, 1.4, -1.5708, -1.5708, 0.5]

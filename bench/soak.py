@@ -20,8 +20,7 @@ import sys
 import threading
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import benchlib  # noqa: E402
+import benchlib  # this folder is the script's, first on sys.path
 
 RSS_LIMIT_MB = 5.0
 GAP_LIMIT_S = 0.050

@@ -13,8 +13,7 @@ import os
 import time
 
 import benchlib
-# The joints, poses and controllers of the driver's documented interface, as its tests name them.
-from ur_driver_sim_check import AWAY, COMMANDING, HOME, HW, JOINTS
+from ur3_ft_gripper_testing.ur_driver import AWAY, COMMANDING, HOME, HW, JOINTS
 
 RSS_LIMIT_MB = 5.0
 NODE = '/ur_hardware_interface'

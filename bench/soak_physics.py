@@ -9,14 +9,14 @@ most 5 MB each after the warm-up; every cycle succeeds and weighs the block
 within 2 % of its world-file mass.
 """
 import os
-import sys
 import time
 
 import benchlib
+from ur3_ft_gripper_testing import shipped
 
-sys.path.insert(0, os.path.join(benchlib.PACKAGE_DIR, 'examples'))
-import guarded_touch  # noqa: E402  (the examples, as shipped)
-import pick_and_weigh  # noqa: E402
+# The examples, as shipped.
+guarded_touch = shipped.script('examples/guarded_touch.py')
+pick_and_weigh = shipped.script('examples/pick_and_weigh.py')
 
 RSS_LIMIT_MB = 5.0
 WEIGHT_TOLERANCE = 0.02

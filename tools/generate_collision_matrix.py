@@ -1,6 +1,7 @@
 """Write config/collision_matrix.yaml: the SRDF's disable_collisions for every model configuration.
 
-Run in `bash tools/quickstart shell` with the consumer tests' Python, which has
+Run in `bash tools/quickstart shell` (the sourced workspace gives this package,
+as it does to test/consumers) with the consumer tests' Python, which has
 pinocchio (its path is in UR3_FT_GRIPPER_CONSUMERS_PYTHON):
 
     "$UR3_FT_GRIPPER_CONSUMERS_PYTHON" tools/generate_collision_matrix.py [--samples 10000]
@@ -15,10 +16,9 @@ import subprocess
 import sys
 import tempfile
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-sys.path.insert(0, os.path.join(os.path.dirname(HERE), 'src'))
+from ur3_ft_gripper_description.model import collision_matrix
 
-from ur3_ft_gripper_description.model import collision_matrix  # noqa: E402 (after the path)
+HERE = os.path.dirname(os.path.abspath(__file__))
 
 CONFIGURATIONS = {  # key in the YAML file -> export_urdf options
     'ft_sensor_gripper': [],

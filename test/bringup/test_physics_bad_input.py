@@ -19,11 +19,10 @@ import pytest
 import rospkg
 
 from ur3_ft_gripper_description.model import description, export
+from ur3_ft_gripper_testing.rostest_helpers import free_port, master_pid, stop_group, wait_for
 
 PACKAGE = 'ur3_ft_gripper_description'
 PACKAGE_DIR = rospkg.RosPack().get_path(PACKAGE)
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-from rostest_helpers import free_port, master_pid, stop_group, wait_for  # noqa: E402
 
 TABLE = """
 table:

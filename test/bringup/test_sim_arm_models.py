@@ -14,15 +14,11 @@ import subprocess
 import sys
 
 import pytest
-import rospkg
 
 from ur3_ft_gripper_description.devices.ur_arm import software
+from ur3_ft_gripper_testing.rostest_helpers import free_port, stop_group, wait_for
 
 PACKAGE = 'ur3_ft_gripper_description'
-PACKAGE_DIR = rospkg.RosPack().get_path(PACKAGE)
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-from rostest_helpers import free_port, stop_group, wait_for  # noqa: E402  (the tests' one helper module)
-
 PROBE = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'sim_arm_probe.py')
 # Universal Robots' CB3 arms; every other model runs the e-Series software (PolyScope 5).
 # Their control loops: CB3 125 Hz, e-Series 500 Hz.

@@ -1,13 +1,10 @@
 """Shared by the reliability tests: a real rosmaster on a free port, real roslaunch."""
 import os
 import subprocess
-import sys
 
 import pytest
 
-PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-from rostest_helpers import free_port, master_pid, stop, wait_for  # noqa: E402  (the tests' one helper module)
+from ur3_ft_gripper_testing.rostest_helpers import free_port, master_pid, stop, wait_for
 
 
 class Master(object):

@@ -11,10 +11,10 @@ from geometry_msgs.msg import WrenchStamped
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 from sensor_msgs.msg import JointState
 
-import rostest_helpers
-from rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import gripper_joint_states, gripper_model
+from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for
 ARM_JOINTS = ('shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
               'wrist_3_joint')
 # TF against the model: the finger angle table is exact to 1e-6 rad, which

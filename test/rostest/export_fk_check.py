@@ -18,9 +18,9 @@ import tf2_ros
 import yourdfpy
 from sensor_msgs.msg import JointState
 
-import rostest_helpers
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import export
+from ur3_ft_gripper_testing import rostest_helpers
 
 TIMEOUT = rospy.Duration(20)
 TRIALS = 3

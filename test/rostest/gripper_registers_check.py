@@ -10,9 +10,9 @@ import tf2_ros
 import yaml
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-import rostest_helpers
-from rostest_helpers import TIMEOUT
 from ur3_ft_gripper_description.devices import gripper_model
+from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT
 
 # A gap of P m ends within one count of the position register (0.140 m / 227
 # counts = 0.62 mm; the mapping truncates to a whole count) plus the finger

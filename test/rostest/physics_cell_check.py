@@ -28,15 +28,15 @@ import rospkg
 import rospy
 import rostest
 
-import rostest_helpers
 from ur3_ft_gripper_description import clients
 from ur3_ft_gripper_description.devices.physics import link
 from ur3_ft_gripper_description.devices.physics.world import load_world
+from ur3_ft_gripper_testing import rostest_helpers, shipped
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'examples'))
-import guarded_touch  # noqa: E402  (the examples, as shipped)
-import pick_and_weigh  # noqa: E402
+# The examples, as shipped.
+guarded_touch = shipped.script('examples/guarded_touch.py')
+pick_and_weigh = shipped.script('examples/pick_and_weigh.py')
 
 WORLD = os.path.join(PACKAGE_DIR, 'test', 'data', 'worlds', 'grasp_matrix.yaml')
 # gPO is a whole count (0.62 mm) of a gap the pads' soft contact closes by a fraction of a millimetre.

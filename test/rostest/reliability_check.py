@@ -12,7 +12,7 @@ from geometry_msgs.msg import WrenchStamped
 from rosgraph_msgs.msg import Log
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-from rostest_helpers import Recorder, logs, wait_for, wait_for_log, wait_for_subscribers
+from ur3_ft_gripper_testing.rostest_helpers import Recorder, logs, wait_for, wait_for_log, wait_for_subscribers
 
 FLOOD_RATE, FLOOD_SECONDS = 1000, 10.0
 GRIPPER_RATE = 50.0

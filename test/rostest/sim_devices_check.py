@@ -26,11 +26,11 @@ from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq
 from robotiq_ft_sensor.msg import ft_sensor
 from robotiq_ft_sensor.srv import sensor_accessor
 
-import rostest_helpers
-from rostest_helpers import TIMEOUT, Recorder
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import gripper_model
 from ur3_ft_gripper_description.model import inertials
+from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, Recorder
 
 G = 9.80665
 # FT 300 manual (config/robotiq_mass.yaml): FT 300 + 2F-140 1275 g, FT 300 alone 300 g.

@@ -10,10 +10,10 @@ from geometry_msgs.msg import WrenchStamped
 from sensor_msgs.msg import JointState
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
-import rostest_helpers
-from rostest_helpers import TIMEOUT
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import gripper_model
+from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT
 
 
 class SimViewTest(unittest.TestCase):

@@ -16,9 +16,9 @@ import rostest
 import tf2_ros
 from roslaunch.substitution_args import resolve_args
 
-import rostest_helpers
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_testing import rostest_helpers
 
 CHAIN = ['base_link', 'tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_ft_frame_id',
          'robotiq_arg2f_base_link']

@@ -20,7 +20,7 @@ from controller_manager_msgs.srv import ListControllers, SwitchController, Switc
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger
 
-from rostest_helpers import TIMEOUT, wait_for, wait_for_subscribers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for, wait_for_subscribers
 
 HW = '/ur_hardware_interface/'
 TRIGGER = 'std_srvs/Trigger'

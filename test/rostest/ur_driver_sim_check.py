@@ -34,26 +34,17 @@ from ur_dashboard_msgs.srv import GetLoadedProgram, GetProgramState, GetRobotMod
 from ur_msgs.msg import IOStates
 from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSliderFraction
 
-import rostest_helpers
-from rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
 from ur3_ft_gripper_description.model.names import PADS
+from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for
+from ur3_ft_gripper_testing.ur_driver import AWAY, COMMANDING, HOME, HW, JOINTS
 
-JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
-          'wrist_3_joint']
-# A pose away from singularities (elbow bent, tool down), and one a little off it.
-HOME = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
-AWAY = [0.4, -1.3, 1.2, -1.2, -1.2, 0.6]
-COMMANDING = ['scaled_pos_joint_traj_controller', 'pos_joint_traj_controller', 'scaled_vel_joint_traj_controller',
-              'vel_joint_traj_controller', 'joint_group_vel_controller', 'forward_joint_traj_controller',
-              'forward_cartesian_traj_controller', 'twist_controller', 'pose_based_cartesian_traj_controller',
-              'joint_based_cartesian_traj_controller']
 # The default constraints' goal tolerance (config/<ur_type>_controllers.yaml: goal 0.1 rad).
 GOAL_TOLERANCE = 0.1
 # Universal Robots' CB3 arms; every other model runs the e-Series software (PolyScope 5).
 CB3_MODELS = ('ur3', 'ur5', 'ur10')
-HW = '/ur_hardware_interface/'
 
 
 class UrDriver(object):

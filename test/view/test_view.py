@@ -16,12 +16,10 @@ import yaml
 from sensor_msgs.msg import JointState
 
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_testing import rostest_helpers, shipped
 
 PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'tools'))
-sys.path.insert(0, os.path.join(PACKAGE_DIR, 'test', 'rostest'))
-import headless_view  # noqa: E402  (the tool under test)
-import rostest_helpers  # noqa: E402  (the tests' one helper module)
+headless_view = shipped.script('tools/headless_view.py')  # the tool under test
 
 VIEW_COMMAND = [sys.executable, os.path.join(PACKAGE_DIR, 'tools', 'headless_view.py')]
 SETTINGS = headless_view.settings()

@@ -1,8 +1,8 @@
 """The tests' one helper module: free ports, waits that fail loudly, recording a topic, TF as matrices.
 
-The rostest nodes of this folder import it directly; test/view,
-test/reliability and bench/ put this folder on sys.path. Every wait here ends
-in an AssertionError naming what did not happen: none falls through.
+The rostest nodes, the pytest folders and bench/ import it as
+`from ur3_ft_gripper_testing import rostest_helpers`. Every wait here ends in
+an AssertionError naming what did not happen: none falls through.
 """
 import os
 import signal
