@@ -28,10 +28,10 @@ import rospkg
 import rospy
 import rostest
 
-from ur3_ft_gripper_description import clients
 from ur3_ft_gripper_description.devices.physics import link
 from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_testing import rostest_helpers, shipped
+from ur3_ft_gripper_testing.grasp import gpo_tolerance
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
 # The examples, as shipped.
@@ -39,8 +39,6 @@ guarded_touch = shipped.script('examples/guarded_touch.py')
 pick_and_weigh = shipped.script('examples/pick_and_weigh.py')
 
 WORLD = os.path.join(PACKAGE_DIR, 'test', 'data', 'worlds', 'grasp_matrix.yaml')
-# gPO is a whole count (0.62 mm) of a gap the pads' soft contact closes by a fraction of a millimetre.
-GPO_TOLERANCE = 2
 WEIGHT_TOLERANCE = 0.02
 # The steady force of the guarded touch against MuJoCo's contact force, relative.
 CONTACT_TOLERANCE = 0.02
@@ -113,7 +111,7 @@ class PhysicsCellTest(unittest.TestCase):
             seen.append('%s %.1f mm: gOBJ %d gPO %d (%.1f mm)' % (name, 1e3 * width, status.gOBJ, status.gPO,
                                                                   1e3 * measured))
             self.assertEqual(status.gOBJ, 2, seen[-1])
-            self.assertLessEqual(abs(status.gPO - scale.position(width)), GPO_TOLERANCE, seen[-1])
+            self.assertLessEqual(abs(status.gPO - scale.position(width)), gpo_tolerance(scale), seen[-1])
             self.assertGreater(status.gCU, 0, seen[-1])
             self.cell.put_down()
             self.assertLess(np.linalg.norm(self.object_position(name)[:2] - start[:2]), 0.005,
