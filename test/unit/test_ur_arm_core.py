@@ -140,9 +140,10 @@ def test_an_unknown_model_is_one_line_naming_the_known_ones(configured_model):
 def test_kinematic_joints_follow_each_mode_within_their_limits():
     joints = jm.KinematicJoints([0.0] * 6, [-1.0] * 6, [1.0] * 6, [0.5] * 6, 0.03)
     joints.step(jm.JointCommand(jm.SERVO, [0.01] + [0.0] * 5), 0.002)
-    assert joints.position[0] == pytest.approx(0.01 * 0.002 / 0.03)  # servoj's first-order lag
+    lagged = 0.01 * (1.0 - math.exp(-0.002 / 0.03))  # servoj's first-order lag
+    assert joints.position[0] == pytest.approx(lagged)
     joints.step(jm.JointCommand(jm.HOLD, [0.5] * 6), 0.002)
-    assert joints.position[0] == pytest.approx(0.01 * 0.002 / 0.03) and not joints.velocity.any()
+    assert joints.position[0] == pytest.approx(lagged) and not joints.velocity.any()
     joints.step(jm.JointCommand(jm.MOVE, [0.001] * 6), 0.002)
     assert np.allclose(joints.position, 0.001)  # the robot's own interpolation: exact
     joints.step(jm.JointCommand(jm.VELOCITY, velocity=[0.1] * 6), 0.01)

@@ -553,7 +553,13 @@ def test_joints_follow_with_the_servo_lag_within_their_limits():
     from ur3_ft_gripper_description.devices.ur_arm.joints import follow
     lower, upper, vmax = [-1.0] * 6, [1.0] * 6, [0.5] * 6
     position, velocity = follow([0.0] * 6, [0.01] + [0.0] * 5, 0.002, 0.03, vmax, lower, upper)
-    assert position[0] == pytest.approx(0.01 * 0.002 / 0.03)  # first-order lag
+    assert position[0] == pytest.approx(0.01 * (1.0 - math.exp(-0.002 / 0.03)))  # first-order lag
+    # Its exact solution: one late cycle of 40 ms moves the joints as five punctual ones of 8 ms do.
+    late, _ = follow([0.0] * 6, [0.01] * 6, 0.04, 0.03, vmax, lower, upper)
+    punctual = [0.0] * 6
+    for _ in range(5):
+        punctual, _ = follow(punctual, [0.01] * 6, 0.008, 0.03, vmax, lower, upper)
+    assert np.allclose(late, punctual) and 0.0 < late[0] < 0.01
     position, velocity = follow([0.0] * 6, [0.9] * 6, 0.002, 0.0, vmax, lower, upper)
     assert np.allclose(velocity, 0.5)  # no faster than the limits
     position, _ = follow([0.99] * 6, [5.0] * 6, 0.1, 0.0, [100.0] * 6, lower, upper)
