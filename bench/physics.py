@@ -83,7 +83,8 @@ def build(folder):
 
 
 def bench(seconds):
-    from ur3_ft_gripper_description.devices.physics.joint_motion import JointCommand, PhysicsJointMotion
+    from ur3_ft_gripper_description.devices.physics.joint_motion import PhysicsJointMotion
+    from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
     from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
 
     with tempfile.TemporaryDirectory() as folder:
