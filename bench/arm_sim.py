@@ -19,11 +19,7 @@ import threading
 import time
 
 import benchlib  # this folder is the script's, first on sys.path
-
-HOME = [0.0, -1.57, 1.57, -1.57, -1.57, 0.0]
-JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
-          'wrist_3_joint']
-
+from ur3_ft_gripper_testing.ur_driver import HOME, JOINTS
 
 
 def bench(ur_type, seconds, rospy):

@@ -18,8 +18,8 @@ from control_msgs.msg import JointTrajectoryControllerState
 from controller_manager_msgs.srv import ListControllers
 from std_srvs.srv import Trigger
 from ur_msgs.srv import GetRobotSoftwareVersion
+from ur3_ft_gripper_testing.ur_driver import HW
 
-HW = '/ur_hardware_interface/'
 TIMEOUT = 120.0
 STAMPS = 200
 

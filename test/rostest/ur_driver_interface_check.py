@@ -21,8 +21,8 @@ from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger
 
 from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for, wait_for_subscribers
+from ur3_ft_gripper_testing.ur_driver import HW
 
-HW = '/ur_hardware_interface/'
 TRIGGER = 'std_srvs/Trigger'
 
 # ROS_INTERFACE.md, "Nodes > ur_robot_driver_node > Advertised Services" (the node is
