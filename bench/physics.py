@@ -83,7 +83,7 @@ def build(folder):
 
 
 def bench(seconds):
-    from ur3_ft_gripper_description.devices.physics.joint_motion import PhysicsJointMotion
+    from ur3_ft_gripper_description.devices.ur_arm.physics_joints import PhysicsJointMotion
     from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
     from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
 

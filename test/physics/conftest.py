@@ -16,7 +16,7 @@ import pytest
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices.physics import MissingMuJoCo, require_mujoco
-from ur3_ft_gripper_description.devices.physics.joint_motion import PhysicsJointMotion
+from ur3_ft_gripper_description.devices.ur_arm.physics_joints import PhysicsJointMotion
 from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
 from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand

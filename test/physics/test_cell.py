@@ -155,7 +155,7 @@ def test_the_core_on_physics_latches_the_stop_as_the_robot_does(make_cell, robot
     from ur3_ft_gripper_description.devices.ur_arm import core as arm_core
     from ur3_ft_gripper_description.devices.ur_arm import robot_state as rs
     from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
-    from ur3_ft_gripper_description.devices.physics.joint_motion import PhysicsJointMotion
+    from ur3_ft_gripper_description.devices.ur_arm.physics_joints import PhysicsJointMotion
     config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', 'ur3_controllers.yaml')
     values = {'~ur_type': 'ur3', '~controller_config_file': config, 'robot_description': robot[1],
               '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller'}

@@ -1,11 +1,9 @@
-"""The simulated cell on physics (MuJoCo): the arm, the FT 300, the 2F-140 and a world, without ROS.
+"""The simulated cell on physics (MuJoCo): the engine and its host, importing nothing of the arm's.
 
 * ``world``: the world file (a table and objects), checked field by field;
 * ``cell``: ``Cell``, one MuJoCo model of export_mjcf's robot and a world,
   stepped in whole timesteps: the arm's servos, the FT 300's reading, the
   finger drive, the objects, the protective stop;
-* ``joint_motion``: the arm's joint-motion interface (HOLD, SERVO, MOVE,
-  VELOCITY) on a Cell, beside the kinematic one;
 * ``arm_cell``: the arm node's Cell, of robot_description as loaded and ~world_file;
 * ``link``: the private socket through which the FT 300 and 2F-140 nodes read the cell;
 * ``pacing``: the real-time factor the arm's node reports.

@@ -24,7 +24,7 @@ decides everything (see there), under one lock. The joints are
 joints.KinematicJoints: they go where they are commanded, no faster than the
 model's velocity limits; no dynamics, no collisions, no protective stops.
 
-With ~physics true they move on MuJoCo instead (physics.joint_motion): the
+With ~physics true they move on MuJoCo instead (ur_arm.physics_joints): the
 node builds the physics cell of robot_description in ~world_file
 (physics.arm_cell), steps it with its control loop, serves it to the FT 300
 and 2F-140 nodes through the private link (physics.link), and publishes
@@ -369,7 +369,7 @@ class PhysicsCell(object):
     def __init__(self, rospy, get_param, settings, lock):
         from diagnostic_msgs.msg import DiagnosticArray
         from ..physics.arm_cell import cell_for_arm
-        from ..physics.joint_motion import PhysicsJointMotion
+        from .physics_joints import PhysicsJointMotion
         from ..physics.pacing import RealTimeMeter
         self.rospy = rospy
         self.cell = cell_for_arm(get_param, settings)

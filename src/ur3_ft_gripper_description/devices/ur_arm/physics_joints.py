@@ -1,4 +1,4 @@
-"""The arm's joint motion on physics: the simulated arm's joint-motion seam over a Cell.
+"""The arm's joint motion on physics: the simulated arm's joint-motion seam over a physics Cell.
 
 The simulated arm's core (``devices/ur_arm/core.py``) decides what the joints
 are asked to do and hands each cycle's ``joints.JointCommand`` to its
@@ -25,8 +25,8 @@ object releases the cell's own hold at once: the core latches the stop
 
 import numpy as np
 
-from ..ur_arm import joints
-from ..ur_arm.joints import HOLD, MOVE, SERVO, VELOCITY
+from . import joints
+from .joints import HOLD, MOVE, SERVO, VELOCITY
 
 
 class PhysicsJointMotion(object):
