@@ -19,7 +19,6 @@ the arm's start pose has them (--at X Y: elsewhere, in base_link).
 """
 import argparse
 import sys
-import time
 
 from ur3_ft_gripper_description import clients
 
@@ -52,26 +51,26 @@ class GuardedTouch(object):
         self.gripper.go(0)
         self.arm.move_along(self.tool.path_to(self.arm.joint_positions(), x, y, START_HEIGHT, CLEAR_HEIGHT))
         self.arm.only('twist_controller', [clients.TRAJECTORY_CONTROLLER])
-        time.sleep(0.5)
+        self.rospy.sleep(0.5)
         self.sensor.zero()
 
     def touch(self, speed, limit, timeout=20.0):
         """Down at `speed` (m/s) until |F| >= `limit` (N); the figures once the arm stands still (dict)."""
         rate = self.rospy.Rate(TWIST_RATE)
-        end = time.monotonic() + timeout
-        start_height, start = self.tool_height(), time.monotonic()
+        end = self.rospy.get_time() + timeout
+        start_height, start = self.tool_height(), self.rospy.get_time()
         while True:
             self.arm.twist(vz=-speed)
             detected = clients.force_norm(self.sensor.latest())
             if detected >= limit:
                 break
-            if time.monotonic() > end:
+            if self.rospy.get_time() > end:
                 self.arm.twist()
                 raise clients.CellError('no %g N of contact within %g s' % (limit, timeout))
             rate.sleep()
         self.arm.twist()
         detected_height = self.tool_height()
-        time.sleep(STILL)
+        self.rospy.sleep(STILL)
         # The peak: the reading that stopped the arm or any later one (an impact rings on a stiff surface).
         forces = [clients.force_norm(w) for w in self.sensor.since(start)]
         peak = max(forces[next(i for i, f in enumerate(forces) if f >= limit):])
@@ -84,17 +83,17 @@ class GuardedTouch(object):
     def back_off(self, speed):
         """Up until the force is gone and 10 mm more, then back on the trajectory controller."""
         rate = self.rospy.Rate(TWIST_RATE)
-        end = time.monotonic() + 5.0 + 0.01 / speed
+        end = self.rospy.get_time() + 5.0 + 0.01 / speed
         clear = None
-        while time.monotonic() < end:
+        while self.rospy.get_time() < end:
             self.arm.twist(vz=speed)
             if clear is None and clients.force_norm(self.sensor.latest()) < 1.0:
-                clear = time.monotonic()
-            if clear is not None and time.monotonic() - clear > 0.01 / speed:
+                clear = self.rospy.get_time()
+            if clear is not None and self.rospy.get_time() - clear > 0.01 / speed:
                 break
             rate.sleep()
         self.arm.twist()
-        time.sleep(0.2)
+        self.rospy.sleep(0.2)
         self.arm.only(clients.TRAJECTORY_CONTROLLER, ['twist_controller'])
 
     def report(self, figures):

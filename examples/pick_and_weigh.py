@@ -20,7 +20,6 @@ it was and opens. Each step prints one line; the weight's reads
 """
 import argparse
 import sys
-import time
 
 from transforms3d.euler import quat2euler
 
@@ -66,7 +65,7 @@ def target_of(world_file, name):
 
 class PickAndWeigh(object):
     def __init__(self, rospy, say=print):
-        self.say = say
+        self.rospy, self.say = rospy, say
         self.arm = clients.UrArm(rospy)
         self.gripper = clients.Gripper2F(rospy)
         self.sensor = clients.FT300(rospy)
@@ -84,7 +83,7 @@ class PickAndWeigh(object):
         self.grasp = self.tool.joints_for(self.tool.tool_down(x, y, max(top - GRASP_DEPTH, GRASP_FLOOR), yaw),
                                           self.above)
         self.arm.move_along(path)
-        time.sleep(SETTLE)
+        self.rospy.sleep(SETTLE)
         self.sensor.zero()
         self.say('above the object at (%.3f, %.3f), sensor zeroed' % (x, y))
         self.arm.move_steadily(self.grasp, speed=0.2)
@@ -98,7 +97,7 @@ class PickAndWeigh(object):
     def weigh(self):
         """Lift the object back above its place and weigh it: (mass kg, force N)."""
         self.arm.move_steadily(self.above, speed=0.2)
-        time.sleep(SETTLE)
+        self.rospy.sleep(SETTLE)
         force = clients.force_norm(self.sensor.mean(AVERAGE))
         return force / clients.STANDARD_GRAVITY, force
 

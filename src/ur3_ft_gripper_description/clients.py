@@ -16,12 +16,16 @@ Where the tool goes is planned with ``ToolKinematics``: the arm's inverse
 kinematics for the model in ``robot_description`` (yours, calibrated), for
 the 2F-140's ``gripper_tcp``. Every wait ends, on time or with a
 ``CellError`` naming what did not happen.
+
+Every wait and every timeout is on ROS time (``rospy.get_time``,
+``rospy.sleep``, the messages' stamps), never the wall clock: on a simulated
+cell with ``use_sim_time`` they run unchanged at any real-time factor, and on
+a busy machine they wait for the cell, which slows down with it.
 """
 
 import collections
 import math
 import threading
-import time
 
 import numpy as np
 
@@ -37,16 +41,16 @@ class CellError(RuntimeError):
     """Something the cell did not do; the message is one line."""
 
 
-def wait_until(condition, what, timeout, step=0.01):
-    """The first true value of condition(), or CellError naming `what` after `timeout` s."""
-    end = time.monotonic() + timeout
+def wait_until(rospy, condition, what, timeout, step=0.01):
+    """The first true value of condition(), or CellError naming `what` after `timeout` s of ROS time."""
+    end = rospy.get_time() + timeout
     while True:
         value = condition()
         if value:
             return value
-        if time.monotonic() > end:
+        if rospy.get_time() > end:
             raise CellError('no %s within %g s' % (what, timeout))
-        time.sleep(step)
+        rospy.sleep(step)
 
 
 class ToolKinematics(object):
@@ -126,7 +130,7 @@ class UrArm(object):
         self.safety_mode = None
         rospy.Subscriber(HARDWARE_INTERFACE + 'safety_mode', SafetyMode,
                          lambda msg: setattr(self, 'safety_mode', self.safety_names.get(msg.mode)), queue_size=1)
-        wait_until(lambda: self.positions is not None, 'joint_states of the arm', timeout)
+        wait_until(rospy, lambda: self.positions is not None, 'joint_states of the arm', timeout)
 
     def _on_joint_state(self, msg):
         if self.joints[0] in msg.name:
@@ -146,10 +150,10 @@ class UrArm(object):
         goal.trajectory.points.append(JointTrajectoryPoint(
             positions=list(positions), velocities=[0.0] * 6, time_from_start=self.rospy.Duration(duration)))
         self.trajectory.send_goal(goal)
-        end = time.monotonic() + duration + 30.0
+        end = self.rospy.get_time() + duration + 30.0
         while not self.trajectory.wait_for_result(self.rospy.Duration(0.1)):
             self.check_safety()
-            if time.monotonic() > end:
+            if self.rospy.get_time() > end:
                 raise CellError('the trajectory did not end within %g s' % (duration + 30.0))
         result = self.trajectory.get_result()
         if result.error_code != FollowJointTrajectoryResult.SUCCESSFUL:
@@ -203,7 +207,7 @@ class Gripper2F(object):
         rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, self._on_status, queue_size=10)
         self.publisher = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
                                          queue_size=10)
-        wait_until(lambda: self.status is not None and self.publisher.get_num_connections(),
+        wait_until(rospy, lambda: self.status is not None and self.publisher.get_num_connections(),
                    'gripper status and command subscriber', timeout)
 
     def _on_status(self, msg):
@@ -219,13 +223,13 @@ class Gripper2F(object):
         """The first status satisfying check(status), `skip` statuses after now (the command's effect)."""
         with self._condition:
             start = self._received
-            end = time.monotonic() + timeout
+            end = self.rospy.get_time() + timeout
             while not (self._received >= start + skip and check(self.status)):
-                left = end - time.monotonic()
-                if left <= 0:
+                if self.rospy.get_time() > end:
                     raise CellError('no gripper status with %s within %g s (last: gOBJ %d gPO %d gSTA %d)' % (
                         what, timeout, self.status.gOBJ, self.status.gPO, self.status.gSTA))
-                self._condition.wait(left)
+                # A short wall-clock wait: a status or the clock's advance ends it (ROS time may be simulated).
+                self._condition.wait(0.05)
             return self.status
 
     def activate(self):
@@ -249,38 +253,41 @@ class FT300(object):
         from geometry_msgs.msg import WrenchStamped
         from robotiq_ft_sensor.srv import sensor_accessor
         self.rospy = rospy
-        self.readings = collections.deque(maxlen=3000)  # (receipt time, (fx, fy, fz, tx, ty, tz))
+        self.readings = collections.deque(maxlen=3000)  # (stamp, (fx, fy, fz, tx, ty, tz))
         self._lock = threading.Lock()
         rospy.Subscriber('robotiq_ft_wrench', WrenchStamped, self._on_wrench, queue_size=100)
         rospy.wait_for_service('robotiq_ft_sensor_acc', timeout)
         self.accessor = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
-        wait_until(lambda: self.readings, 'robotiq_ft_wrench', timeout)
+        wait_until(rospy, lambda: self.readings, 'robotiq_ft_wrench', timeout)
 
     def _on_wrench(self, msg):
         f, t = msg.wrench.force, msg.wrench.torque
         with self._lock:
-            self.readings.append((time.monotonic(), (f.x, f.y, f.z, t.x, t.y, t.z)))
+            self.readings.append((msg.header.stamp.to_sec(), (f.x, f.y, f.z, t.x, t.y, t.z)))
 
     def latest(self):
         with self._lock:
             return self.readings[-1][1]
 
-    def since(self, start):
+    def since(self, start, end=float('inf')):
+        """The readings stamped from `start` (s, ROS time) on, up to `end`."""
         with self._lock:
-            return [w for t, w in self.readings if t >= start]
+            return [w for t, w in self.readings if start <= t <= end]
 
     def zero(self):
         """SET_ZERO (command_id 8): later readings are relative to the current one."""
         reply = self.accessor(command_id=8, command='')
         if not reply.success:
             raise CellError('robotiq_ft_sensor_acc refused SET_ZERO: %s' % reply.res)
-        time.sleep(0.05)  # the next reading is the zeroed one
+        self.rospy.sleep(0.05)  # the next reading is the zeroed one
 
     def mean(self, seconds):
         """The mean wrench over the next `seconds` s."""
-        start = time.monotonic()
-        time.sleep(seconds)
-        readings = self.since(start)
+        start = self.rospy.get_time()
+        end = start + seconds
+        wait_until(self.rospy, lambda: self.readings and self.readings[-1][0] >= end,
+                   'robotiq_ft_wrench for %g s' % seconds, seconds + 10.0)
+        readings = self.since(start, end)
         if not readings:
             raise CellError('no robotiq_ft_wrench in %g s' % seconds)
         return tuple(float(v) for v in np.mean(readings, axis=0))
