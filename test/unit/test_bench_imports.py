@@ -12,7 +12,7 @@ import os
 
 import pytest
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 PACKAGE = 'ur3_ft_gripper_description'
 SCRIPTS = sorted(glob.glob(os.path.join(PACKAGE_DIR, 'bench', '*.py')))
@@ -57,6 +57,6 @@ def test_each_name_a_benchmark_imports_from_the_package_exists(path):
 
 def test_a_name_that_moved_is_found(tmp_path):
     script = tmp_path / 'moved.py'
-    script.write_text('def run():\n    from %s.devices.physics.joint_motion import JointCommand\n' % PACKAGE)
-    assert missing_names(str(script)) == ['moved.py:2: %s.devices.physics.joint_motion has no JointCommand'
+    script.write_text('def run():\n    from %s.devices.ur_arm.physics_joints import JointCommand\n' % PACKAGE)
+    assert missing_names(str(script)) == ['moved.py:2: %s.devices.ur_arm.physics_joints has no JointCommand'
                                           % PACKAGE]
