@@ -26,10 +26,15 @@ never publishes a wrench for a pose it does not know.
 With ``~physics`` true (sim_devices.launch physics:=true) the true wrench is
 the physics cell's instead (MuJoCo's force and torque at the sensor frame:
 the tool side's weight and inertia, contacts, whatever the fingers hold),
-read through the private link from the arm's node (physics/link.py) at the
-same rate; SET_ZERO, the noise and the stream's resolution stay as above.
-TF and ~payload_mass / ~payload_com are not used then: physics weighs what
-the gripper holds.
+read through the private link from the arm's node (physics/link.py); SET_ZERO,
+the noise and the stream's resolution stay as above. TF and ~payload_mass /
+~payload_com are not used then: physics weighs what the gripper holds. On
+simulated time (use_sim_time) the cell keeps one sample per period of its
+time for this node, so the stream carries exactly ~rate readings per
+simulated second, each stamped with its time, however late the node runs.
+
+Both sources, the gravity model and the cell, sit behind one seam
+(GravitySource, CellSource: ``readings(now)``) and one publishing loop.
 """
 
 import dataclasses
@@ -37,6 +42,7 @@ import numpy as np
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import node_loop, sim_params, wrench_model
+from ur3_ft_gripper_description.devices.physics import link
 from ur3_ft_gripper_description.model import inertials
 
 
@@ -166,13 +172,17 @@ class SensorModel(object):
 
     def read_quaternion(self, x, y, z, w):
         """The reading for the sensor's orientation as a unit quaternion (a tf2 lookup's)."""
-        # Gravity (world -z) in the sensor frame: minus the rotation matrix's last row.
-        return self.read_gravity(2.0 * (y * w - x * z), -2.0 * (y * z + x * w),
-                                 2.0 * (x * x + y * y) - 1.0)
+        return self.read(self.true_for_quaternion(x, y, z, w))
 
     def read_gravity(self, gx, gy, gz):
         """(fx, fy, fz, tx, ty, tz), as the device sends it, for gravity along (gx, gy, gz)."""
         return self.read(wrench_model.gravity_wrench(gx, gy, gz, self._mass, self._com))
+
+    def true_for_quaternion(self, x, y, z, w):
+        """The noise-free wrench of the modelled load for the sensor's orientation (a unit quaternion)."""
+        # Gravity (world -z) in the sensor frame: minus the rotation matrix's last row.
+        return wrench_model.gravity_wrench(2.0 * (y * w - x * z), -2.0 * (y * z + x * w),
+                                           2.0 * (x * x + y * y) - 1.0, self._mass, self._com)
 
     def read(self, true):
         """(fx, fy, fz, tx, ty, tz), as the device sends it, for the true wrench `true` (six floats)."""
@@ -295,9 +305,74 @@ class _Log(object):
             self.warn(text)
 
 
+class GravitySource(object):
+    """The true wrench of the kinematic simulation: the modelled load's weight for the sensor's pose in TF.
+
+    `readings(now)`: [(stamp, true wrench)], one for the pose at `now` (rospy.Time), or none while the
+    pose is unknown or stale (PoseWatch says so).
+    """
+
+    def __init__(self, rospy, settings, sensor):
+        import tf2_ros
+        self.tf2_ros, self.settings, self.sensor = tf2_ros, settings, sensor
+        self.watch = PoseWatch(settings, rospy.logwarn, rospy.loginfo, rospy.Time.now().to_sec())
+        self.buffer = tf2_ros.Buffer()
+        tf2_ros.TransformListener(self.buffer)
+        self._latest = rospy.Time(0)
+
+    def readings(self, now):
+        try:
+            # lookup_transform() without a timeout is can_transform() + this call.
+            stamped = self.buffer.lookup_transform_core(self.settings.gravity_frame, self.settings.frame_id,
+                                                        self._latest)
+        except self.tf2_ros.TransformException as exc:
+            self.watch.missing(str(exc).strip() or type(exc).__name__, now.to_sec())
+            return ()
+        if not self.watch.fresh(stamped.header.stamp.to_sec(), now.to_sec()):
+            return ()
+        q = stamped.transform.rotation
+        return ((now, self.sensor.true_for_quaternion(q.x, q.y, q.z, q.w)),)
+
+    def restart(self):
+        """ROS time jumped back: what TF held is of another time."""
+        self.buffer.clear()
+
+
+class CellSource(object):
+    """The true wrench of the physics cell, through the link (`client`: a link.CellClient).
+
+    On simulated time the cell keeps one sample per `period` s of its time for this node, so the
+    stream has every reading, stamped with its simulated time, however late this node runs. On the
+    wall clock (use_sim_time false) each reading is the cell's wrench when asked, stamped now.
+    """
+
+    def __init__(self, rospy, client, period, sim_time):
+        self.rospy, self.client, self.period, self.sim_time = rospy, client, period, sim_time
+        self._dropped_said = False
+        if sim_time:
+            client.wrench_samples(period)  # the cell keeps samples from here on
+
+    def readings(self, now):
+        if not self.sim_time:
+            return ((now, self.client.wrench()[1]),)
+        samples, dropped = self.client.wrench_samples(self.period)[1:]
+        if dropped and not self._dropped_said:
+            self._dropped_said = True
+            self.rospy.logwarn('ft300_sim: %d readings were lost: this node fell more than the cell keeps '
+                               'behind the physics cell; the machine is too busy for this real-time factor'
+                               % dropped)
+        Time = self.rospy.Time
+        return [(Time(*divmod(int(round(t * 1e9)), 1000000000)), wrench) for t, wrench in samples]
+
+    def restart(self):
+        pass
+
+
 def run(rospy):
-    """The node: parameters, publishers, service, loop. Returns the exit status."""
-    import tf2_ros
+    """The node: parameters, the true wrench's source, publishers, service, one publishing loop.
+
+    Returns the exit status.
+    """
     from geometry_msgs.msg import WrenchStamped
     from robotiq_ft_sensor.msg import ft_sensor
     from robotiq_ft_sensor.srv import sensor_accessor, sensor_accessorResponse
@@ -316,9 +391,13 @@ def run(rospy):
     if serial_id:
         rospy.loginfo('ft300_sim: ~serial_id %s is not used: this sensor is simulated', serial_id)
     sensor = SensorModel(settings)
-    watch = PoseWatch(settings, rospy.logwarn, rospy.loginfo, rospy.Time.now().to_sec())
-    tf_buffer = tf2_ros.Buffer()
-    tf2_ros.TransformListener(tf_buffer)
+    sim_time = bool(rospy.get_param('/use_sim_time', False))
+    if physics:
+        source = _cell_source(rospy, settings, sim_time)
+        if not isinstance(source, CellSource):
+            return source
+    else:
+        source = GravitySource(rospy, settings, sensor)
     sensor_publisher = rospy.Publisher('robotiq_ft_sensor', ft_sensor, queue_size=512)
     wrench_publisher = rospy.Publisher('robotiq_ft_wrench', WrenchStamped, queue_size=512)
     log = _Log(rospy)
@@ -329,41 +408,38 @@ def run(rospy):
         return sensor_accessorResponse(success=success, res=res)
 
     rospy.Service('robotiq_ft_sensor_acc', sensor_accessor, accessor)
-    latest = rospy.Time(0)
-    # One message each, refilled each cycle: publish() serializes before returning.
+    # One message each, refilled for every reading: publish() serializes before returning.
     stream = ft_sensor()
     message = WrenchStamped()
     message.header.frame_id = settings.frame_id
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
+    lost = []
 
-    if physics:
-        return _run_on_physics(rospy, settings, sensor, sensor_publisher, wrench_publisher, stream, message)
-
-    def step():
-        now = rospy.Time.now()
+    def step(now=None):
         try:
-            # lookup_transform() without a timeout is can_transform() + this call.
-            stamped = tf_buffer.lookup_transform_core(settings.gravity_frame, settings.frame_id,
-                                                      latest)
-        except tf2_ros.TransformException as exc:
-            watch.missing(str(exc).strip() or type(exc).__name__, now.to_sec())
+            readings = source.readings(now or rospy.Time.now())
+        except link.LinkError as exc:
+            lost.append(link.lost_cell(rospy, 'ft300_sim', exc))
             return
-        if watch.fresh(stamped.header.stamp.to_sec(), now.to_sec()):
-            q = stamped.transform.rotation
-            fx, fy, fz, tx, ty, tz = sensor.read_quaternion(q.x, q.y, q.z, q.w)
+        for stamp, true in readings:
+            fx, fy, fz, tx, ty, tz = sensor.read(true)
             stream.Fx, stream.Fy, stream.Fz, stream.Mx, stream.My, stream.Mz = fx, fy, fz, tx, ty, tz
             sensor_publisher.publish(stream)
-            message.header.stamp = now
+            message.header.stamp = stamp
             force_msg.x, force_msg.y, force_msg.z = fx, fy, fz
             torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
             wrench_publisher.publish(message)
 
-    return node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=tf_buffer.clear)
+    if sim_time:
+        # One reading per period of simulated time, stamped with it, however late this node runs.
+        status = node_loop.run_on_every_tick(rospy, settings.rate, step)
+    else:
+        status = node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=source.restart)
+    return 1 if lost else status
 
 
-def _run_on_physics(rospy, settings, sensor, sensor_publisher, wrench_publisher, stream, message):
-    """The loop with the physics cell's wrench as the true one. Returns the exit status."""
-    from ur3_ft_gripper_description.devices.physics import link
+def _cell_source(rospy, settings, sim_time):
+    """The CellSource of the physics cell beside this node, or the exit status when there is none to read."""
     client = link.wait_for_cell(rospy, 'ft300_sim')
     if client is None:
         return 0
@@ -371,27 +447,16 @@ def _run_on_physics(rospy, settings, sensor, sensor_publisher, wrench_publisher,
         rospy.logfatal('ft300_sim: the physics cell has %s where this sensor reads %s: give both the same '
                        'model and ~prefix (or ~frame_id)', client.info['ft_frame'] or 'no FT 300', settings.frame_id)
         return 1
+    period = 1.0 / settings.rate
+    try:
+        source = CellSource(rospy, client, period, sim_time)
+    except link.LinkError as exc:
+        rospy.logfatal('ft300_sim: ~rate=%g Hz: %s' % (settings.rate, exc))
+        return 1
     rospy.loginfo('ft300_sim: reading %s from the physics cell; publishing robotiq_ft_sensor and '
-                  'robotiq_ft_wrench at %g Hz', settings.frame_id, settings.rate)
-    force_msg, torque_msg = message.wrench.force, message.wrench.torque
-    lost = []
-
-    def step():
-        try:
-            true = client.wrench()[1]
-        except link.LinkError as exc:
-            lost.append(link.lost_cell(rospy, 'ft300_sim', exc))
-            return
-        fx, fy, fz, tx, ty, tz = sensor.read(true)
-        stream.Fx, stream.Fy, stream.Fz, stream.Mx, stream.My, stream.Mz = fx, fy, fz, tx, ty, tz
-        sensor_publisher.publish(stream)
-        message.header.stamp = rospy.Time.now()
-        force_msg.x, force_msg.y, force_msg.z = fx, fy, fz
-        torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
-        wrench_publisher.publish(message)
-
-    status = node_loop.run_at_rate(rospy, settings.rate, step)
-    return 1 if lost else status
+                  'robotiq_ft_wrench at %g Hz of %s time', settings.frame_id, settings.rate,
+                  'simulated' if sim_time else 'wall-clock')
+    return source
 
 
 def main():

@@ -409,29 +409,41 @@ def run(rospy):
                   'Robotiq2FGripperRobotOutput', int(round(gripper.position)),
                   ', on the physics cell' if fingers else
                   '' if width is None else ', object of %g m between the pads' % width)
-    clock = {'time': rospy.Time.now()}
     message = Robotiq2FGripper_robot_input()
 
-    def step():
-        now = rospy.Time.now()
+    def publish_after(dt):
+        """Let `dt` s pass in the register machine, then publish its status."""
         with lock:
             if lost:
                 return
             try:
-                gripper.advance((now - clock['time']).to_sec())
+                gripper.advance(dt)
             except link.LinkError as exc:
                 lost.append(link.lost_cell(rospy, 'gripper_sim', exc))
                 return
             status = gripper.status()
-        clock['time'] = now
         for name, value in status.items():
             setattr(message, name, value)
         publisher.publish(message)
 
-    def restart_clock():
-        clock['time'] = rospy.Time.now()
+    if rospy.get_param('/use_sim_time', False):
+        # One status per period of simulated time, each a period later than the last, however late
+        # this node runs; a command takes effect at the cell's next control cycle (physics) or this
+        # node's next tick.
+        period = 1.0 / rate
+        status = node_loop.run_on_every_tick(rospy, rate, lambda stamp: publish_after(period))
+    else:
+        clock = {'time': rospy.Time.now()}
 
-    status = node_loop.run_at_rate(rospy, rate, step, on_time_jump=restart_clock)
+        def step():
+            now = rospy.Time.now()
+            publish_after((now - clock['time']).to_sec())
+            clock['time'] = now
+
+        def restart_clock():
+            clock['time'] = rospy.Time.now()
+
+        status = node_loop.run_at_rate(rospy, rate, step, on_time_jump=restart_clock)
     return 1 if lost else status
 
 

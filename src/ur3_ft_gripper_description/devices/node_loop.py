@@ -134,6 +134,109 @@ def run_at_rate(rospy, hz, step, on_time_jump=None):
     return 1 if master['restarted'] else 0
 
 
+def run_on_every_tick(rospy, hz, step):
+    """Call `step(stamp)` once for every tick of 1/`hz` s of ROS time until rospy shuts down; the exit status.
+
+    For a node on a simulated clock (use_sim_time): a tick that passed while
+    the node ran late (the cell runs faster than real time, the machine is
+    busy) is still served, late, with its own time as `stamp` (a rospy.Time,
+    a whole number of periods), so that over any stretch of simulated time the
+    node publishes exactly `hz` messages a second. rospy.Rate would drop them
+    instead. A clock that jumps back (the simulation restarted) starts the
+    ticks anew.
+    """
+    master = watch_master(rospy)
+    gate = PublishGate(rospy)
+    gc.freeze()
+    period_ns = int(round(1e9 / hz))
+    tick = None  # the number of the last tick served
+    while not rospy.is_shutdown():
+        now = rospy.Time.now()
+        due = now.to_nsec() // period_ns
+        if tick is None or due < tick:
+            tick = due - 1
+        while tick < due and not rospy.is_shutdown():
+            tick += 1
+            gate.call(step, rospy.Time(*divmod(tick * period_ns, 1000000000)))
+        try:
+            rospy.sleep(rospy.Time(*divmod((tick + 1) * period_ns, 1000000000)) - now)
+        except rospy.ROSTimeMovedBackwardsException:
+            tick = None
+        except rospy.ROSInterruptException:
+            break
+    return 1 if master['restarted'] else 0
+
+
+def other_clock_publishers(rospy):
+    """The nodes other than this one that publish /clock (the master's view)."""
+    import rosgraph
+    publishers = rosgraph.Master(rospy.get_name()).getSystemState()[0]
+    me = rospy.get_name()
+    return sorted(node for topic, nodes in publishers if topic == '/clock' for node in nodes if node != me)
+
+
+def _rival_clock_line(rospy, rivals):
+    return ('%s: %s publish%s /clock too, and this node is the simulated cell\'s clock (use_sim_time:=true): '
+            'stop %s, or start the cell with use_sim_time:=false' % (
+                rospy.get_name(), ', '.join(rivals), 'es' if len(rivals) == 1 else '',
+                'it' if len(rivals) == 1 else 'them'))
+
+
+def run_as_clock(rospy, clock, step, check_period=2.0):
+    """The simulated cell's clock loop: per cycle, `clock.tick()`, /clock, `step(period, stamp)`, the pace's wait.
+
+    `clock` is a sim_clock.SimClock; `stamp` is the cycle's simulated time as a rospy.Time, which
+    everything the cycle publishes carries. Another node publishing /clock (a bag played with --clock,
+    Gazebo) stops this one with one fatal line naming it: two clocks would make every node's time jump.
+    Returns the exit status.
+    """
+    import rosgraph
+    from rosgraph_msgs.msg import Clock
+    master = watch_master(rospy)
+    gate = PublishGate(rospy)
+    publisher = rospy.Publisher('/clock', Clock, queue_size=10)
+    unreachable = MASTER_UNREACHABLE + (rosgraph.MasterException,)
+    rivals = other_clock_publishers(rospy)
+    if rivals:
+        rospy.logfatal(_rival_clock_line(rospy, rivals))
+        return 1
+    found = []
+
+    def watch_rivals():
+        pause = threading.Event()
+        while not rospy.is_shutdown() and not found:
+            pause.wait(check_period)
+            try:
+                others = other_clock_publishers(rospy)
+            except unreachable:
+                continue
+            if others:
+                found.append(others)
+                rospy.logfatal(_rival_clock_line(rospy, others))
+                rospy.signal_shutdown('another /clock')
+
+    threading.Thread(target=watch_rivals, name='watch /clock', daemon=True).start()
+    gc.freeze()
+    message = Clock()
+    pause = threading.Event()  # wall-clock waits: the pace is the wall clock's
+
+    def cycle():
+        message.clock = rospy.Time(*divmod(clock.nanoseconds, 1000000000))
+        publisher.publish(message)
+        step(clock.period, message.clock)
+        return True
+
+    clock.start()
+    while not rospy.is_shutdown():
+        clock.tick()
+        if not gate.call(cycle):
+            break
+        wait = clock.pause()
+        if wait > 0.0:
+            pause.wait(wait)
+    return 1 if master['restarted'] or found else 0
+
+
 def spin(rospy):
     """rospy.spin() for a callback-only node, with the master watch; returns the exit status.
 

@@ -1,11 +1,12 @@
-"""How well the physics cell keeps up with the wall clock (no ROS).
+"""How well the physics cell keeps the pace it is given (no ROS).
 
-The arm's node steps the cell at its control rate, paced by the wall clock:
-each cycle lets the time since the last one pass in the cell, at most a few
-control periods (so a stalled machine does not make the arm jump). When the
-machine cannot step the cell as fast as real time, simulated time falls
-behind: the real-time factor (simulated seconds per wall-clock second) drops
-below 1. The node publishes it on /diagnostics and warns once.
+The arm's node steps the cell at its control rate, either on its own
+simulated clock paced to the wall clock at a real-time factor
+(devices/sim_clock.py; 0: as fast as possible), or, without use_sim_time, by
+the wall-clock time since the last cycle. When the machine cannot step the
+cell as fast as asked, the real-time factor achieved (simulated seconds per
+wall-clock second) falls below the pace. The node publishes it on
+/diagnostics and warns once.
 """
 
 import collections
@@ -19,8 +20,10 @@ SLOW = 0.9
 class RealTimeMeter(object):
     """The real-time factor over the last `window` seconds of (wall-clock time, simulated time) samples."""
 
-    def __init__(self, window=WINDOW, slow=SLOW):
+    def __init__(self, window=WINDOW, slow=SLOW, paced_to=1.0):
+        """`paced_to`: the factor the loop is paced to; None or 1: real time, 0: as fast as possible (never slow)."""
         self.window, self.slow = float(window), float(slow)
+        self.paced_to = 1.0 if paced_to is None else float(paced_to)
         self._samples = collections.deque()
         self._warned = False
 
@@ -45,10 +48,9 @@ class RealTimeMeter(object):
     def slow_warning(self):
         """The one line to warn with, the first time a whole window ran slower than `slow`; else None."""
         factor = self.factor()
-        if self._warned or not self.full() or factor is None or factor >= self.slow:
+        if self._warned or self.paced_to == 0.0 or not self.full() or factor is None or factor >= self.slow:
             return None
         self._warned = True
-        return ('the physics cell runs at %.2f x real time over the last %g s (below %g): this machine cannot '
-                'step it as fast as the wall clock, so the simulated cell runs slower than real time; close '
-                'other programs, or use the kinematic simulation (physics:=false)'
-                % (factor, self.window, self.slow))
+        return ('the physics cell runs at %.2f x real time over the last %g s (below %g of the %g asked for): this '
+                'machine cannot step it that fast, so the simulated cell runs slower; close other programs, or '
+                'use the kinematic simulation (physics:=false)' % (factor, self.window, self.slow, self.paced_to))

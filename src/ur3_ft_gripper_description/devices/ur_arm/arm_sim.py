@@ -25,11 +25,16 @@ joints.KinematicJoints: they go where they are commanded, no faster than the
 model's velocity limits; no dynamics, no collisions, no protective stops.
 
 With ~physics true they move on MuJoCo instead (ur_arm.physics_joints): the
-node builds the physics cell of robot_description in ~world_file
-(physics.arm_cell), steps it with its control loop, serves it to the FT 300
-and 2F-140 nodes through the private link (physics.link), and publishes
-the achieved real-time factor on /diagnostics (diagnostic_msgs/DiagnosticArray,
-once a second), warning once when the machine cannot keep up.
+node hosts the physics cell (physics.host: built from robot_description in
+~world_file, served to the FT 300 and 2F-140 nodes, its real-time factor on
+/diagnostics) and steps it with its control loop.
+
+With use_sim_time (the default with physics) the node is the cell's clock:
+each control cycle is exactly one period of simulated time, published on
+/clock, paced to the wall clock at ~real_time_factor (sim_clock,
+node_loop.run_as_clock), and everything it publishes is stamped with it.
+Without, the loop runs on the wall clock, each cycle as long as the time
+since the last.
 """
 
 import threading
@@ -51,9 +56,7 @@ from ur_dashboard_msgs.msg import RobotMode, SafetyMode, SetModeAction, SetModeF
 from ur_msgs import srv as ur_srv
 from ur_msgs.msg import Analog, Digital, IOStates, ToolDataMsg
 
-from .. import sim_params
-from ..node_loop import main as node_main
-from ..node_loop import run_at_rate
+from .. import node_loop, sim_clock, sim_params
 from ..physics import link
 from . import cartesian
 from . import core as arm_core
@@ -74,10 +77,16 @@ class ArmSim(object):
         get_param = get_param or rospy.get_param
         settings = read_settings(get_param)
         self.prefix, self.loop_hz = settings.prefix, settings.loop_hz
+        # On simulated time the node is the clock: what it publishes carries the cycle's time.
+        self.clock = sim_clock.SimClock(settings.loop_hz, settings.real_time_factor) if settings.use_sim_time \
+            else None
         self.physics = None
         if sim_params.read(get_param, PARAMETERS, '~physics'):
-            self.physics = PhysicsCell(rospy, get_param, settings, self.lock)
-            motion = self.physics.motion
+            from ..physics.host import CellHost
+            from .physics_joints import PhysicsJointMotion
+            self.physics = CellHost(rospy, get_param, settings, self.lock,
+                                    pace=settings.real_time_factor if self.clock else None)
+            motion = PhysicsJointMotion.from_settings(self.physics.cell, settings)
         else:
             motion = joints.KinematicJoints.from_settings(settings)
         self.core = core = arm_core.ArmCore(settings, motion)
@@ -220,8 +229,15 @@ class ArmSim(object):
         elif reply.status == 'succeeded':
             handle.set_succeeded(self._result(name, reply.code, reply.message), reply.message)
 
+    def now(self):
+        """ROS time as the controllers see it: the clock's own on simulated time (its /clock reaches this
+        node's rospy a moment later), else rospy's."""
+        if self.clock is not None:
+            return self.rospy.Time(*divmod(self.clock.nanoseconds, 1000000000))
+        return self.rospy.Time.now()
+
     def _start_delay(self, stamp):
-        return 0.0 if stamp.is_zero() else (stamp - self.rospy.Time.now()).to_sec()
+        return 0.0 if stamp.is_zero() else (stamp - self.now()).to_sec()
 
     def _trajectory_goal(self, name):
         def on_goal(handle):
@@ -272,7 +288,7 @@ class ArmSim(object):
 
     def _query_state(self, name):
         def on_query(request):
-            ahead = (request.time - self.rospy.Time.now()).to_sec()
+            ahead = (request.time - self.now()).to_sec()
             sample = self._call(self.core.query_state, name, ahead)
             # None: joint_trajectory_controller answers false, the client sees a failed call.
             return None if sample is None else (self.joint_names,) + sample
@@ -302,16 +318,16 @@ class ArmSim(object):
 
     # -- the control cycle -----------------------------------------------------------------------
 
-    def step(self, dt):
+    def step(self, dt, stamp=None):
+        """One control cycle of `dt` s; what it publishes is stamped `stamp` (default: ROS time now)."""
         with self.lock:
             snapshot = self.core.step(dt)
         self._report()
-        self._publish(snapshot)
+        self._publish(snapshot, stamp or self.rospy.Time.now())
         if self.physics is not None:
             self.physics.after_step()
 
-    def _publish(self, s):
-        now = self.rospy.Time.now()
+    def _publish(self, s, now):
         q, qd = s.position.tolist(), s.velocity.tolist()
         if 'joint_state_controller' in s.reading:
             joint_state = JointState(name=self.joint_names, position=q, velocity=qd, effort=s.effort.tolist())
@@ -361,59 +377,6 @@ class ArmSim(object):
             self.state_pubs[name].publish(state)
 
 
-class PhysicsCell(object):
-    """The physics cell of this node (~physics): its joint motion, its link server, its real-time factor."""
-
-    DIAGNOSTICS_PERIOD = 1.0  # s
-
-    def __init__(self, rospy, get_param, settings, lock):
-        from diagnostic_msgs.msg import DiagnosticArray
-        from ..physics.arm_cell import cell_for_arm
-        from .physics_joints import PhysicsJointMotion
-        from ..physics.pacing import RealTimeMeter
-        self.rospy = rospy
-        self.cell = cell_for_arm(get_param, settings)
-        self.world = self.cell.world.path
-        self.motion = PhysicsJointMotion.from_settings(self.cell, settings)
-        self.meter = RealTimeMeter()
-        self.address = link.node_cell_address(rospy)[0]
-        self.server = link.CellServer(self.cell, self.address, lock=lock)
-        rospy.on_shutdown(self.server.close)
-        self.diagnostics = rospy.Publisher('/diagnostics', DiagnosticArray, queue_size=10)
-        self.next_report = 0.0
-        self.cycles = 0
-        rospy.loginfo('%s: physics (MuJoCo) with the world %s; the FT 300 and 2F-140 nodes reach the cell at %s'
-                      % (NODE, self.world, self.address))
-
-    def after_step(self):
-        """Once per control cycle, after the core's step: the real-time factor, and its report once a second."""
-        wall = self.rospy.get_time()
-        self.meter.add(wall, self.cell.time)
-        self.cycles += 1
-        warning = self.meter.slow_warning()
-        if warning and not self.rospy.core.is_shutdown_requested():  # a shutdown stalls the loop: no warning
-            self.rospy.logwarn('%s: %s' % (NODE, warning))
-        if wall >= self.next_report:
-            self.next_report = wall + self.DIAGNOSTICS_PERIOD
-            self._report(wall)
-
-    def _report(self, wall):
-        from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-        factor = self.meter.factor()
-        slow = factor is not None and self.meter.full() and factor < self.meter.slow
-        status = DiagnosticStatus(
-            level=DiagnosticStatus.WARN if slow else DiagnosticStatus.OK,
-            name='%s: physics' % self.rospy.get_name(), hardware_id='physics cell (MuJoCo)',
-            message=('real-time factor %.2f' % factor) if factor is not None else 'starting',
-            values=[KeyValue(key='real-time factor', value='%.3f' % factor if factor is not None else ''),
-                    KeyValue(key='simulated time (s)', value='%.3f' % self.cell.time),
-                    KeyValue(key='control cycles', value=str(self.cycles)),
-                    KeyValue(key='world', value=self.world)])
-        message = DiagnosticArray(status=[status])
-        message.header.stamp = self.rospy.Time.now()
-        self.diagnostics.publish(message)
-
-
 def _points(points):
     return [Point(p.time_from_start.to_sec(), p.positions, p.velocities, p.accelerations) for p in points]
 
@@ -432,6 +395,9 @@ def main():
         except (sim_params.ParamError, MissingMuJoCo, WorldError, DescriptionError) as exc:
             rospy.logfatal('%s: %s' % (NODE, exc))
             return 1
+        if sim.clock is not None:
+            return node_loop.run_as_clock(rospy, sim.clock, sim.step)
+        # The wall clock: each cycle as long as the time since the last, at most ten periods.
         longest_step = 10.0 / sim.loop_hz
         clock = {'last': rospy.get_time()}
 
@@ -443,5 +409,5 @@ def main():
         def restart_clock():
             clock['last'] = rospy.get_time()
 
-        return run_at_rate(rospy, sim.loop_hz, step, on_time_jump=restart_clock)
-    return node_main(NODE, run)
+        return node_loop.run_at_rate(rospy, sim.loop_hz, step, on_time_jump=restart_clock)
+    return node_loop.main(NODE, run)

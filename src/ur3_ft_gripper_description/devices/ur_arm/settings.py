@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from .. import sim_params
+from .. import sim_clock, sim_params
 from ..physics import arm_cell
 from . import controller_manager as cm
 from . import robot_state as rs
@@ -62,7 +62,7 @@ PARAMETERS = (
                      sim_params.flag),
     sim_params.Param('~headless_mode', False, "As ur_robot_driver's: resend_robot_program starts the program "
                      '(true) or dashboard play does (false)', sim_params.flag),
-) + arm_cell.PARAMETERS
+) + arm_cell.PARAMETERS + sim_clock.PARAMETERS
 
 
 class Settings(object):
@@ -115,6 +115,9 @@ def read_settings(get_param):
                                     'model\'s limits (rad)' % (given,))
     settings.initial = initial
     settings.servo_lag = param('~servoj_lookahead_time')
+    # /use_sim_time is ROS's own global parameter (rospy reads it too), not the node's.
+    settings.use_sim_time = sim_params.flag('/use_sim_time', get_param('/use_sim_time', False))
+    settings.real_time_factor = sim_clock.check_factor(settings.use_sim_time, param('~real_time_factor'))
     mode = param('~robot_mode')
     settings.robot = rs.RobotState(settings.software, robot_mode=mode, program_running=param('~program_running'),
                                    headless=param('~headless_mode'))
