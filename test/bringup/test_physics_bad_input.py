@@ -4,6 +4,8 @@
   `ur3_ft_gripper_bringup.launch sim:=true physics:=true world:=...` on its own rosmaster; the arm's
   node says what is wrong in one line naming the file and the field, and, being required, ends the
   launch.
+- A real-time factor that is negative or not a number, and a second node publishing /clock beside the
+  simulated cell's clock (a bag played with --clock): one line from the arm's node, and the launch ends.
 - MuJoCo not installed: the arm's node run with physics by a Python that has everything the
   workspace's has but MuJoCo (a venv made here from the workspace's, its packages linked in but
   mujoco's), against a real master with the model and the controllers loaded: one line with the
@@ -67,24 +69,62 @@ def one_line(output, words):
     return lines[0]
 
 
-@pytest.mark.parametrize('case', sorted(BAD_WORLDS))
-def test_a_bad_world_file_is_one_line_and_ends_the_launch(case, tmp_path):
-    text, words = BAD_WORLDS[case]
-    world = tmp_path / 'world.yaml'
-    world.write_text(text)
-    port = free_port()
+def launch_until_it_ends(tmp_path, arguments, port=None):
+    """roslaunch of the bring-up with sim:=true physics:=true and `arguments` on its own master; its output
+    once it ended (its required arm node stopped)."""
+    port = port or free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % port)
     log_path = str(tmp_path / 'roslaunch.log')
     with open(log_path, 'w') as log:
         launch = subprocess.Popen(['roslaunch', '-p', str(port), PACKAGE, 'ur3_ft_gripper_bringup.launch', 'sim:=true',
-                                   'physics:=true', 'world:=%s' % world], stdout=log, stderr=subprocess.STDOUT,
+                                   'physics:=true'] + arguments, stdout=log, stderr=subprocess.STDOUT,
                                   env=env, start_new_session=True)
         try:
             wait_for(lambda: launch.poll() is not None, 'roslaunch to end when its required node stops', 120)
         finally:
             stop_group(launch)
-    line = one_line(open(log_path).read(), [str(world)] + words)
+    return open(log_path).read()
+
+
+@pytest.mark.parametrize('case', sorted(BAD_WORLDS))
+def test_a_bad_world_file_is_one_line_and_ends_the_launch(case, tmp_path):
+    text, words = BAD_WORLDS[case]
+    world = tmp_path / 'world.yaml'
+    world.write_text(text)
+    line = one_line(launch_until_it_ends(tmp_path, ['world:=%s' % world]), [str(world)] + words)
     assert 'ur_hardware_interface' in line
+
+
+@pytest.mark.parametrize('factor, words', [('-1', ['~real_time_factor', 'must be >= 0']),
+                                           ('fast', ['~real_time_factor', 'is not a number'])])
+def test_a_bad_real_time_factor_is_one_line_and_ends_the_launch(factor, words, tmp_path):
+    line = one_line(launch_until_it_ends(tmp_path, ['real_time_factor:=%s' % factor]), words)
+    assert 'ur_hardware_interface' in line and '[FATAL]' in line
+
+
+def test_a_second_clock_is_one_line_naming_it_and_ends_the_launch(tmp_path):
+    port = free_port()
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % port)
+    master = subprocess.Popen(['rosmaster', '--core', '-p', str(port)], stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+    rival = None
+    try:
+        wait_for(lambda: master_pid(env['ROS_MASTER_URI']), 'rosmaster on port %d' % port, 30)
+        # What `rosbag play --clock` does: another node publishing /clock.
+        rival = subprocess.Popen(['rostopic', 'pub', '-r', '10', '/clock', 'rosgraph_msgs/Clock',
+                                  '{clock: {secs: 1, nsecs: 0}}', '__name:=bag_player'],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, start_new_session=True)
+        import rosgraph
+        wait_for(lambda: any(topic == '/clock' for topic, nodes in
+                             rosgraph.Master('/test', master_uri=env['ROS_MASTER_URI']).getSystemState()[0]),
+                 'the other node to publish /clock', 30)
+        output = launch_until_it_ends(tmp_path, [], port=port)
+    finally:
+        if rival is not None:
+            stop_group(rival)
+        stop_group(master)
+    line = one_line(output, ['/bag_player', 'publishes /clock too'])
+    assert 'use_sim_time:=false' in line and 'ur_hardware_interface' in line, line
 
 
 @pytest.fixture

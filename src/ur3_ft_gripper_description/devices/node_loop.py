@@ -199,6 +199,8 @@ def run_as_clock(rospy, clock, step, check_period=2.0):
     rivals = other_clock_publishers(rospy)
     if rivals:
         rospy.logfatal(_rival_clock_line(rospy, rivals))
+        # rospy's own threads (actionlib's, the servers') would keep the process alive past main's return.
+        rospy.signal_shutdown('another /clock')
         return 1
     found = []
 

@@ -1,0 +1,136 @@
+#!/usr/bin/env python3
+"""rostest node: the simulated cell on one clock (sim_clock.test), judged on simulated time.
+
+At real_time_factor 0 the cell runs as fast as the machine allows; nothing
+of what the drivers' interfaces publish may be lost or repeated for it:
+rq_sensor's stream carries one reading per 10 ms of simulated time, stamped
+with it; joint_state_controller one joint state per control period; the
+2F-140 one status per 20 ms. The real-time factor the arm's node reports is
+checked against what /clock and this process's wall clock show over the
+same window.
+"""
+import threading
+import time
+import unittest
+
+import rospy
+import rostest
+from diagnostic_msgs.msg import DiagnosticArray
+from geometry_msgs.msg import WrenchStamped
+from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import JointState
+
+from ur3_ft_gripper_testing import rostest_helpers
+
+# Ten simulated seconds of each stream, counted from a start well after the cell came up.
+SPAN = 10.0
+FT_PERIOD = 0.01       # rq_sensor's 100 Hz
+GRIPPER_PERIOD = 0.02  # the Robotiq driver's 50 Hz status
+# Stamps are whole nanoseconds: two readings a period apart differ by it to within a nanosecond.
+STAMP_TOLERANCE = 2e-9
+
+
+class Streams(object):
+    """Every message of the four streams, with the ROS time (simulated) and wall-clock time of receipt."""
+
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.clock, self.arm, self.wrench, self.gripper, self.diagnostics = [], [], [], [], []
+        # queue_size None: rospy keeps every message for the callback, however late this node runs.
+        rospy.Subscriber('/clock', Clock, self._on_clock, queue_size=None)
+        rospy.Subscriber('joint_states', JointState, self._on_joints, queue_size=None)
+        rospy.Subscriber('robotiq_ft_wrench', WrenchStamped, self._on_wrench, queue_size=None)
+        rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, self._on_gripper,
+                         queue_size=None)
+        rospy.Subscriber('/diagnostics', DiagnosticArray, self._on_diagnostics, queue_size=None)
+
+    def _on_clock(self, msg):
+        with self.lock:
+            self.clock.append((time.monotonic(), msg.clock.to_sec()))
+
+    def _on_joints(self, msg):
+        if 'shoulder_pan_joint' in msg.name:
+            with self.lock:
+                self.arm.append(msg.header.stamp.to_nsec())
+
+    def _on_wrench(self, msg):
+        with self.lock:
+            self.wrench.append(msg.header.stamp.to_nsec())
+
+    def _on_gripper(self, msg):
+        with self.lock:
+            self.gripper.append(rospy.get_time())
+
+    def _on_diagnostics(self, msg):
+        for status in msg.status:
+            values = {v.key: v.value for v in status.values}
+            if status.name.endswith(': physics') and values.get('real-time factor'):
+                with self.lock:
+                    self.diagnostics.append((time.monotonic(), float(values['real-time factor'])))
+
+
+def in_window(stamps_ns, start, end):
+    return [s for s in stamps_ns if start * 1e9 <= s < end * 1e9]
+
+
+class SimClockTest(unittest.TestCase):
+
+    @classmethod
+    def setUpClass(cls):
+        rospy.init_node('sim_clock_check')
+        cls.loop_hz = float(rospy.get_param('~loop_hz'))
+        cls.streams = Streams()
+        # The cell is up once every stream flows; counting starts a simulated second later.
+        rostest_helpers.wait_for(lambda: cls.streams.arm and cls.streams.wrench and cls.streams.gripper,
+                                 'joint_states, robotiq_ft_wrench and Robotiq2FGripperRobotInput')
+        cls.start = rospy.get_time() + 1.0
+        cls.end = cls.start + SPAN
+        # Waits on simulated time: the window is over when /clock has passed its end by a second.
+        rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + 1.0, 'the end of the window on /clock',
+                                 timeout=rostest_helpers.TIMEOUT + 60)
+
+    def test_the_ft300_stream_has_one_reading_per_10_ms_of_simulated_time(self):
+        stamps = in_window(self.streams.wrench, self.start, self.end)
+        self.assertEqual(len(stamps), round(SPAN / FT_PERIOD), 'readings in %g simulated s' % SPAN)
+        gaps = {round((b - a) * 1e-9, 9) for a, b in zip(stamps, stamps[1:])}
+        self.assertEqual(gaps, {FT_PERIOD}, 'the gaps between consecutive stamps (s)')
+
+    def test_joint_states_come_once_per_control_period(self):
+        period = 1.0 / self.loop_hz
+        stamps = in_window(self.streams.arm, self.start, self.end)
+        self.assertEqual(len(stamps), round(SPAN / period), 'joint states in %g simulated s' % SPAN)
+        gaps = {round((b - a) * 1e-9, 9) for a, b in zip(stamps, stamps[1:])}
+        self.assertEqual(gaps, {round(period, 9)}, 'the gaps between consecutive stamps (s)')
+
+    def test_the_gripper_status_comes_at_50_hz_of_simulated_time(self):
+        with self.streams.lock:
+            received = [t for t in self.streams.gripper if self.start <= t < self.end]
+        # Received, not stamped (the register message has no header): a status published at the
+        # window's edge may arrive on either side of it.
+        self.assertAlmostEqual(len(received), SPAN / GRIPPER_PERIOD, delta=1)
+
+    def test_the_reported_real_time_factor_is_what_clock_and_the_wall_clock_show(self):
+        # The node's factor is over the last 3 wall-clock s before it reports; the same window from
+        # this node's records of /clock, taken when it arrives.
+        with self.streams.lock:
+            reports = list(self.streams.diagnostics)
+            clock = list(self.streams.clock)
+        checked = 0
+        for wall, reported in reports[2:]:
+            before = [(w, c) for w, c in clock if w <= wall]
+            window = [(w, c) for w, c in before if w >= wall - 3.0]
+            if len(window) < 100 or window[0][0] > wall - 2.9:
+                continue
+            (w0, c0), (w1, c1) = window[0], window[-1]
+            measured = (c1 - c0) / (w1 - w0)
+            self.assertAlmostEqual(reported, measured, delta=0.1 * measured,
+                                   msg='reported %.3f, /clock over the wall clock %.3f' % (reported, measured))
+            checked += 1
+        self.assertGreater(checked, 3, 'diagnostics with a whole window of /clock beside them')
+        rospy.loginfo('sim_clock_check: /clock ran at %.2f x the wall clock (real_time_factor 0, %g Hz)'
+                      % (measured, self.loop_hz))
+
+
+if __name__ == '__main__':
+    rostest.rosrun('ur3_ft_gripper_description', 'sim_clock', SimClockTest)
