@@ -9,10 +9,10 @@ import math
 import numpy as np
 import pytest
 
-from conftest import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import wrench_model
 from ur3_ft_gripper_description.model import inertials
+from ur3_ft_gripper_testing.physics import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
 
 FRAME = 'robotiq_ft_frame_id'
 POSES = {

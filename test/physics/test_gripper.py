@@ -10,9 +10,9 @@ import math
 import numpy as np
 import pytest
 
-from conftest import START, Arm, close_on, in_gripper
 from ur3_ft_gripper_description.devices.physics.cell import AT_TARGET, ON_OBJECT
 from ur3_ft_gripper_testing.grasp import GAP_TOLERANCE
+from ur3_ft_gripper_testing.physics import START, Arm, close_on, in_gripper
 
 # The creep limit: a held object hanging still may slip by less than this (m/s).
 CREEP_LIMIT = 17e-6

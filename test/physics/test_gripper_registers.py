@@ -8,10 +8,10 @@ import time
 
 import pytest
 
-from conftest import START, Served
 from ur3_ft_gripper_description.devices import gripper_sim
 from ur3_ft_gripper_description.devices.physics.link import CellClient
 from ur3_ft_gripper_testing.grasp import gpo_tolerance
+from ur3_ft_gripper_testing.physics import START, Served
 
 PERIOD = 0.02  # the gripper node's 50 Hz
 

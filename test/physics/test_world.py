@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from conftest import START, TABLE
 from ur3_ft_gripper_description.devices.physics.world import WorldError, load_world
+from ur3_ft_gripper_testing.physics import START, TABLE
 
 BOX = """
   - name: %s

@@ -9,7 +9,7 @@ import subprocess
 import pytest
 import yaml
 
-from conftest import UR_CONFIG, assert_one_line_error, run_expand
+from ur3_ft_gripper_testing.model import UR_CONFIG, assert_one_line_error, run_expand
 
 
 def kinematics_without(tmp_path, segment):

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import CONFIGURATIONS, UR_CONFIG_ROOT, configuration_id
 from ur3_ft_gripper_description.model import tcp
+from ur3_ft_gripper_testing.model import CONFIGURATIONS, UR_CONFIG_ROOT, configuration_id
 
 ARM_CHAIN = ['base_link', 'base_link_inertia', 'shoulder_link', 'upper_arm_link', 'forearm_link',
              'wrist_1_link', 'wrist_2_link', 'wrist_3_link', 'flange', 'tool0']

@@ -5,7 +5,7 @@ import re
 
 import pytest
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 PAGES = [os.path.join(PACKAGE_DIR, 'README.md')] + sorted(glob.glob(os.path.join(PACKAGE_DIR, 'doc', '*.md')))
 LINK = re.compile(r'\]\(([^)\s]+)\)')

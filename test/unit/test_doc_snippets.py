@@ -28,7 +28,7 @@ import sys
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, UR_CONFIG_ROOT
+from ur3_ft_gripper_testing.model import PACKAGE_DIR, UR_CONFIG_ROOT
 
 SNIPPETS = json.loads(subprocess.run(
     [sys.executable, os.path.join(PACKAGE_DIR, 'tools', 'doc_snippets.py'), '--json'], stdout=subprocess.PIPE,

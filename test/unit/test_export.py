@@ -6,8 +6,8 @@ import pytest
 import yaml
 import yourdfpy
 
-from conftest import UR_CONFIG_ROOT, ExpandedModel, run_export
 from ur3_ft_gripper_description.model import export
+from ur3_ft_gripper_testing.model import UR_CONFIG_ROOT, ExpandedModel, run_export
 
 CASES = {  # name -> export_urdf options
     'ur3-default': [],

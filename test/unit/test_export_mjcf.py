@@ -4,7 +4,7 @@ import xml.etree.ElementTree as ElementTree
 
 import pytest
 
-from conftest import EXPORT_MJCF, run_export
+from ur3_ft_gripper_testing.model import EXPORT_MJCF, run_export
 
 
 def export_mjcf(*args):

@@ -4,7 +4,7 @@ import shutil
 import subprocess
 import sys
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 GENERATOR = os.path.join(PACKAGE_DIR, 'tools', 'generate_references.py')
 REFERENCE = os.path.join(PACKAGE_DIR, 'doc', 'launch_reference.md')

@@ -10,7 +10,7 @@ import os
 
 import pytest
 
-from conftest import PACKAGE, PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE, PACKAGE_DIR
 
 SOURCE = os.path.join(PACKAGE_DIR, 'src', PACKAGE)
 NAMES = PACKAGE + '.model.names'

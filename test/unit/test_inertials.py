@@ -5,8 +5,8 @@ import xml.etree.ElementTree as ElementTree
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, TOGGLES, robotiq_variant
 from ur3_ft_gripper_description.model import export, inertials, inertials_from_meshes
+from ur3_ft_gripper_testing.model import PACKAGE_DIR, TOGGLES, robotiq_variant
 
 FIGURES = os.path.join(PACKAGE_DIR, 'config', 'robotiq_mass.yaml')
 TABLE = os.path.join(PACKAGE_DIR, 'config', 'link_inertials.yaml')

@@ -10,7 +10,7 @@ import pytest
 import yaml
 from catkin_pkg.package import parse_package
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 PACKAGE = 'ur3_ft_gripper_description'
 # Each view launch with the arguments it requires.

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, UR_CONFIG, ExpandedModel, robotiq_variant
 from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_testing.model import PACKAGE_DIR, UR_CONFIG, ExpandedModel, robotiq_variant
 
 SENSOR_CHAIN = ['tool0', 'ft300_mounting_plate', 'ft300_sensor', 'robotiq_ft_frame_id',
                 'robotiq_arg2f_base_link']

@@ -18,8 +18,8 @@ import pytest
 import yaml
 from lxml import etree
 
-from conftest import PACKAGE, PACKAGE_DIR
 from ur3_ft_gripper_description.devices import sim_params
+from ur3_ft_gripper_testing.model import PACKAGE, PACKAGE_DIR
 
 
 def generator():

@@ -10,9 +10,10 @@ import rospkg
 import yaml
 from roslaunch.substitution_args import resolve_args
 
-from conftest import UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, assert_one_line_error, run_expand
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_testing.model import (UR_CONFIG, UR_CONFIG_ROOT, UR_TYPES, ExpandedModel, assert_one_line_error,
+                                          run_expand)
 
 PARAMETER_FILES = tuple(description.UR_DEFAULT_FILES.values())
 VALID_LIST = ', '.join(UR_TYPES)

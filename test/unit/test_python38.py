@@ -9,7 +9,7 @@ import os
 import subprocess
 import sys
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 SKIP_DIRS = {'.git', '__pycache__', 'build', 'devel'}
 

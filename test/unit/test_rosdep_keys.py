@@ -15,7 +15,7 @@ import rospkg
 import yaml
 from catkin_pkg.package import parse_package
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 NOETIC = {'ROS_DISTRO': 'noetic', 'ROS_VERSION': '1', 'ROS_PYTHON_VERSION': '3'}
 USER_REPOS_FILES = ('robotiq-noetic.repos', 'robotiq-kinetic.repos')

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import gripper_joint_states, gripper_model, wrench_model
 from ur3_ft_gripper_description.devices.wrench_model import STANDARD_GRAVITY as G
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 PAYLOAD_YAML = os.path.join(PACKAGE_DIR, 'config', 'sim_devices.yaml')
 

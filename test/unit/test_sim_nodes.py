@@ -7,8 +7,8 @@ import pytest
 import yaml
 from transforms3d.quaternions import quat2mat
 
-from conftest import PACKAGE_DIR, configured
 from ur3_ft_gripper_description.devices import ft300_sim, gripper_joint_states, gripper_sim, sim_params
+from ur3_ft_gripper_testing.model import PACKAGE_DIR, configured
 
 
 def params(**values):

@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 import yaml
 
-from conftest import PACKAGE_DIR, robotiq_variant
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import tcp
+from ur3_ft_gripper_testing.model import PACKAGE_DIR, robotiq_variant
 
 TCP_YAML = os.path.join(PACKAGE_DIR, 'config', 'gripper_tcp.yaml')
 

@@ -9,7 +9,7 @@ import ast
 import importlib.util
 import os
 
-from conftest import PACKAGE_DIR
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 HELPERS = 'ur3_ft_gripper_testing'
 HELPERS_DIR = os.path.join(PACKAGE_DIR, 'test', 'python', HELPERS)

@@ -21,8 +21,8 @@ import pytest
 import yaml
 from roslaunch.substitution_args import resolve_args
 
-from conftest import EXPAND, PACKAGE_DIR, UR_CONFIG, ExpandedModel, assert_one_line_error
 from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_testing.model import EXPAND, PACKAGE_DIR, UR_CONFIG, ExpandedModel, assert_one_line_error
 
 XACRO_FILE = os.path.join(PACKAGE_DIR, 'urdf', 'ur3_ft_gripper.xacro')
 
