@@ -183,10 +183,10 @@ def measure_each(script, names, args, say):
     return results
 
 
-def main_per_ur_type(argv, doc, script, section, bench, table, seconds):
-    """A benchmark's main() that measures a ur3 (CB3, 125 Hz) and a ur5e (e-Series, 500 Hz), each in a process
-    and on a master of its own: bench(ur_type, seconds, rospy) -> a JSON-able result, table(results) -> Markdown,
-    written into `section` of --output."""
+def main_per_ur_type(argv, doc, script, section, bench, table, seconds, cases=('ur3', 'ur5e')):
+    """A benchmark's main() that measures each of `cases` (by default a ur3, CB3 at 125 Hz, and a ur5e,
+    e-Series at 500 Hz), each in a process and on a master of its own: bench(case, seconds, rospy) -> a
+    JSON-able result, table(results) -> Markdown, written into `section` of --output."""
     import argparse
     parser = argparse.ArgumentParser(description=doc.split('\n')[0])
     parser.add_argument('--seconds', type=float, default=seconds, help='measuring window (s, default %g)' % seconds)
@@ -199,8 +199,8 @@ def main_per_ur_type(argv, doc, script, section, bench, table, seconds):
 
     def say(text):
         print('[%s bench] %s' % (name, text), file=sys.stderr)
-    say('ur3 and ur5e: %g s each' % args.seconds)
-    results = measure_each(os.path.abspath(script), ('ur3', 'ur5e'), ['--seconds', str(args.seconds)], say)
+    say('%s: %g s each' % (', '.join(cases), args.seconds))
+    results = measure_each(os.path.abspath(script), cases, ['--seconds', str(args.seconds)], say)
     if results is None:
         return 1
     text = table(results)

@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
-"""The physics cell behind the ROS interfaces at their real rates: real-time factor, state rates, gaps, CPU.
+"""The physics cell behind the ROS interfaces at their real rates, on its simulated clock at 1x and at full speed.
 
     python3 bench/physics_ros.py [--seconds 20] [--output bench/RESULTS.md]
 
 In the sourced workspace (tools/quickstart shell), with MuJoCo installed. For a CB3 (ur3, 125 Hz) and an
-e-Series (ur5e, 500 Hz), each on its own rosmaster on a free port, the bring-up with sim:=true
-physics:=true in the default world, then for `seconds`, while the arm runs a trajectory through
-scaled_pos_joint_traj_controller back and forth and the gripper closes and opens through its registers:
-- as received here: joint_states (the arm's control rate), robotiq_ft_wrench (100 Hz) and
-  Robotiq2FGripperRobotInput (50 Hz): rate, gaps (median, p99, max);
-- the real-time factor the arm's node reports on /diagnostics (mean and lowest over the window);
+e-Series (ur5e, 500 Hz), each at real_time_factor 1 and 0 (as fast as the machine allows), each on its own
+rosmaster on a free port, the bring-up with sim:=true physics:=true in the default world, then for
+`seconds` of wall-clock time, while the arm runs a trajectory through scaled_pos_joint_traj_controller
+back and forth and the gripper closes and opens through its registers:
+- /clock over the wall clock (the real-time factor achieved, measured here), and the factor the arm's
+  node reports on /diagnostics (mean and lowest over the window);
+- as received here, per simulated second: joint_states (the arm's control rate), robotiq_ft_wrench
+  (100 Hz) and Robotiq2FGripperRobotInput (50 Hz), and the largest gap between consecutive stamps
+  (simulated ms; the gripper's status has no stamp);
 - CPU of the arm's process (the cell steps there), and of the FT 300's and the gripper's nodes.
 Figures, not pass/fail: exit status 0 when every measurement ran.
 """
@@ -27,35 +30,48 @@ NODES = ('/ur_hardware_interface', '/robotiq_ft_sensor', '/robotiq2FGripper')
 
 
 class Arrivals(object):
-    def __init__(self):
+    """(wall-clock receipt, stamp or None) of a stream's messages."""
+
+    def __init__(self, stamped):
         self.lock = threading.Lock()
-        self.times = []
+        self.items = []
+        self.stamped = stamped
 
-    def add(self, _msg):
+    def add(self, msg):
+        stamp = msg.header.stamp.to_sec() if self.stamped else None
         with self.lock:
-            self.times.append(time.monotonic())
+            self.items.append((time.monotonic(), stamp))
 
-    def window(self, start, end):
+    def window(self, start, end, simulated):
+        """Messages per simulated second over the wall-clock window, and the largest stamp gap (ms)."""
         with self.lock:
-            times = [t for t in self.times if start <= t <= end]
-        gaps = [(b - a) * 1e3 for a, b in zip(times, times[1:])]
-        return dict(hz=len(times) / (end - start), median=benchlib.median(gaps), p99=benchlib.percentile(gaps, 99),
-                    max=max(gaps) if gaps else float('nan'))
+            items = [(t, s) for t, s in self.items if start <= t <= end]
+        stamps = [s for _, s in items if s is not None]
+        gaps = [(b - a) * 1e3 for a, b in zip(stamps, stamps[1:])]
+        return dict(hz=len(items) / simulated, max_gap=max(gaps) if gaps else float('nan'))
 
 
-def bench(ur_type, seconds, rospy):
+def bench(case, seconds, rospy):
+    """`case`: 'UR_TYPE:FACTOR'."""
+    ur_type, factor = case.split(':')
     import actionlib
     from control_msgs.msg import FollowJointTrajectoryAction, FollowJointTrajectoryGoal
     from diagnostic_msgs.msg import DiagnosticArray
     from geometry_msgs.msg import WrenchStamped
+    from rosgraph_msgs.msg import Clock
     from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
     from sensor_msgs.msg import JointState
     from trajectory_msgs.msg import JointTrajectoryPoint
 
     launch = benchlib.roslaunch('ur3_ft_gripper_description', 'ur_ft_gripper_bringup.launch', 'sim:=true',
-                                'physics:=true', 'ur_type:=%s' % ur_type, log=os.environ.get('BENCH_LOG'))
+                                'physics:=true', 'ur_type:=%s' % ur_type, 'real_time_factor:=%s' % factor,
+                                log=os.environ.get('BENCH_LOG'))
     try:
-        streams = {name: Arrivals() for name in ('joint_states', 'robotiq_ft_wrench', 'Robotiq2FGripperRobotInput')}
+        streams = {'joint_states': Arrivals(True), 'robotiq_ft_wrench': Arrivals(True),
+                   'Robotiq2FGripperRobotInput': Arrivals(False)}
+        clock = []
+        rospy.Subscriber('/clock', Clock, lambda msg: clock.append((time.monotonic(), msg.clock.to_sec())),
+                         queue_size=1000, tcp_nodelay=True)
         rospy.Subscriber('joint_states', JointState,
                          lambda msg: streams['joint_states'].add(msg) if len(msg.name) == 6 else None,
                          queue_size=1000, tcp_nodelay=True)
@@ -72,7 +88,7 @@ def bench(ur_type, seconds, rospy):
                                               FollowJointTrajectoryAction)
         if not client.wait_for_server(rospy.Duration(120)):
             raise RuntimeError('no scaled_pos_joint_traj_controller action server')
-        benchlib.wait_for(lambda: all(s.times for s in streams.values()) and gripper.get_num_connections(),
+        benchlib.wait_for(lambda: all(s.items for s in streams.values()) and gripper.get_num_connections(),
                           'the three state streams and the gripper command subscriber', 120)
         pids = {}
         for node in NODES:
@@ -97,8 +113,11 @@ def bench(ur_type, seconds, rospy):
         end = time.monotonic()
         cpu = {n: 100.0 * (benchlib.cpu_seconds(p) - cpu0[n]) / (end - start) for n, p in pids.items()}
         window = [f for t, f in factors if start <= t <= end]
-        return dict(ur_type=ur_type, loop_hz=rospy.get_param('/hardware_control_loop/loop_hz'), moves=moves,
-                    seconds=end - start, streams={k: s.window(start, end) for k, s in streams.items()},
+        ticks = [c for t, c in clock if start <= t <= end]
+        simulated = ticks[-1] - ticks[0]
+        return dict(ur_type=ur_type, factor=float(factor), loop_hz=rospy.get_param('/hardware_control_loop/loop_hz'),
+                    moves=moves, seconds=end - start, clock_factor=simulated / (end - start),
+                    streams={k: s.window(start, end, simulated) for k, s in streams.items()},
                     rtf_mean=sum(window) / len(window) if window else float('nan'),
                     rtf_min=min(window) if window else float('nan'), cpu=cpu)
     finally:
@@ -115,26 +134,30 @@ def _pid(node):
 def table(results):
     lines = ['### Physics cell behind the ROS interfaces (`bench/physics_ros.py`), %s' % benchlib.now_text(), '',
              'Machine: %s; load average before: %s. The bring-up with sim:=true physics:=true in the default '
-             'world; a 2 s trajectory back and forth through scaled_pos_joint_traj_controller and the gripper '
-             'closing and opening at rSP 128 all along.' % (benchlib.machine(), benchlib.load_average()), '',
-             '| ur_type | loop_hz | real-time factor mean / lowest | topic | received (Hz) | gap median / p99 / max (ms) |',
-             '| --- | --- | --- | --- | --- | --- |']
+             'world, on its simulated clock paced at real_time_factor 1 and 0 (as fast as possible); a 2 s '
+             'trajectory back and forth through scaled_pos_joint_traj_controller and the gripper closing and '
+             'opening at rSP 128 all along. Rates are per simulated second; gaps between stamps in simulated ms.'
+             % (benchlib.machine(), benchlib.load_average()), '',
+             '| ur_type | real_time_factor | /clock over wall clock | reported mean / lowest | topic | per simulated s '
+             '| largest stamp gap (ms) |', '| --- | --- | --- | --- | --- | --- | --- |']
     for r in results:
         for k, (topic, s) in enumerate(sorted(r['streams'].items())):
-            head = ('| %s | %d | %.3f / %.3f ' % (r['ur_type'], r['loop_hz'], r['rtf_mean'], r['rtf_min'])
-                    if k == 0 else '| | | ')
-            lines.append(head + '| %s | %.1f | %.2f / %.2f / %.2f |' % (topic, s['hz'], s['median'], s['p99'], s['max']))
-    lines += ['', '| ur_type | measured (s) | trajectories | CPU (% of one core): ur_hardware_interface (arm + cell) '
-              '| robotiq_ft_sensor | robotiq2FGripper |', '| --- | --- | --- | --- | --- | --- |']
+            head = ('| %s | %g | %.2f | %.2f / %.2f ' % (r['ur_type'], r['factor'], r['clock_factor'], r['rtf_mean'],
+                                                       r['rtf_min']) if k == 0 else '| | | | ')
+            lines.append(head + '| %s | %.1f | %.1f |' % (topic, s['hz'], s['max_gap']))
+    lines += ['', '| ur_type | real_time_factor | measured (wall s) | trajectories | CPU (% of one core): '
+              'ur_hardware_interface (arm + cell) | robotiq_ft_sensor | robotiq2FGripper |',
+              '| --- | --- | --- | --- | --- | --- | --- |']
     for r in results:
-        lines.append('| %s | %.0f | %d | %.0f | %.0f | %.0f |' % (
-            r['ur_type'], r['seconds'], r['moves'], r['cpu']['/ur_hardware_interface'], r['cpu']['/robotiq_ft_sensor'],
-            r['cpu']['/robotiq2FGripper']))
+        lines.append('| %s | %g | %.0f | %d | %.0f | %.0f | %.0f |' % (
+            r['ur_type'], r['factor'], r['seconds'], r['moves'], r['cpu']['/ur_hardware_interface'],
+            r['cpu']['/robotiq_ft_sensor'], r['cpu']['/robotiq2FGripper']))
     return '\n'.join(lines) + '\n'
 
 
 def main(argv=None):
-    return benchlib.main_per_ur_type(argv, __doc__, __file__, 'physics_ros', bench, table, 20.0)
+    return benchlib.main_per_ur_type(argv, __doc__, __file__, 'physics_ros', bench, table, 20.0,
+                                     cases=('ur3:1', 'ur3:0', 'ur5e:1', 'ur5e:0'))
 
 
 if __name__ == '__main__':

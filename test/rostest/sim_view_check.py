@@ -49,6 +49,10 @@ class SimViewTest(unittest.TestCase):
         target = rospy.wait_for_message('gripper/joint_states', JointState, TIMEOUT).position[0]
         rostest_helpers.wait_for(lambda: abs(self.finger_angle() - target) < 1e-9,
                                  'finger_joint %g in joint_states' % target, step=0)
+        # TF reaches this node after joint_states (robot_state_publisher turns one into the other): wait
+        # for the pads to stand where the model puts them for that angle, on a busy machine too.
+        rostest_helpers.wait_for(lambda: abs(self.pad_gap() - self.fingers.opening(target)) < 1e-5,
+                                 'the pads in TF at finger_joint %g' % target, step=0.01)
 
     def test_wrench_is_in_the_prefixed_sensor_frame(self):
         msg = rospy.wait_for_message('robotiq_ft_wrench', WrenchStamped, TIMEOUT)
