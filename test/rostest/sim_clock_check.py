@@ -27,6 +27,9 @@ from ur3_ft_gripper_testing import rostest_helpers
 SPAN = 10.0
 FT_PERIOD = 0.01       # rq_sensor's 100 Hz
 GRIPPER_PERIOD = 0.02  # the Robotiq driver's 50 Hz status
+GRIPPER_EDGES = 10     # statuses: 0.2 s of lag at the window's edges
+# Reports of the real-time factor to check against /clock.
+REPORTS = 5
 # Stamps are whole nanoseconds: two readings a period apart differ by it to within a nanosecond.
 STAMP_TOLERANCE = 2e-9
 
@@ -70,8 +73,8 @@ class Streams(object):
                     self.diagnostics.append((time.monotonic(), float(values['real-time factor'])))
 
 
-def in_window(stamps_ns, start, end):
-    return [s for s in stamps_ns if start * 1e9 <= s < end * 1e9]
+def in_window(stamps_ns, start_ns, end_ns):
+    return [s for s in stamps_ns if start_ns <= s < end_ns]
 
 
 class SimClockTest(unittest.TestCase):
@@ -84,21 +87,28 @@ class SimClockTest(unittest.TestCase):
         # The cell is up once every stream flows; counting starts a simulated second later.
         rostest_helpers.wait_for(lambda: cls.streams.arm and cls.streams.wrench and cls.streams.gripper,
                                  'joint_states, robotiq_ft_wrench and Robotiq2FGripperRobotInput')
-        cls.start = rospy.get_time() + 1.0
-        cls.end = cls.start + SPAN
+        # Whole nanoseconds on a multiple of every period (2, 8, 10, 20 ms), so that a window of SPAN holds
+        # exactly SPAN / period stamps of each stream.
+        grid = 40000000
+        cls.start_ns = (int(rospy.get_time() * 1e9) // grid + 25) * grid
+        cls.end_ns = cls.start_ns + int(SPAN * 1e9)
+        cls.start, cls.end = cls.start_ns * 1e-9, cls.end_ns * 1e-9
         # Waits on simulated time: the window is over when /clock has passed its end by a second.
         rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + 1.0, 'the end of the window on /clock',
                                  timeout=rostest_helpers.TIMEOUT + 60)
+        # The factor is reported once a wall-clock second, over the last three: enough reports to check.
+        rostest_helpers.wait_for(lambda: len(cls.streams.diagnostics) >= REPORTS + 3,
+                                 '%d reports of the real-time factor on /diagnostics' % (REPORTS + 3))
 
     def test_the_ft300_stream_has_one_reading_per_10_ms_of_simulated_time(self):
-        stamps = in_window(self.streams.wrench, self.start, self.end)
+        stamps = in_window(self.streams.wrench, self.start_ns, self.end_ns)
         self.assertEqual(len(stamps), round(SPAN / FT_PERIOD), 'readings in %g simulated s' % SPAN)
         gaps = {round((b - a) * 1e-9, 9) for a, b in zip(stamps, stamps[1:])}
         self.assertEqual(gaps, {FT_PERIOD}, 'the gaps between consecutive stamps (s)')
 
     def test_joint_states_come_once_per_control_period(self):
         period = 1.0 / self.loop_hz
-        stamps = in_window(self.streams.arm, self.start, self.end)
+        stamps = in_window(self.streams.arm, self.start_ns, self.end_ns)
         self.assertEqual(len(stamps), round(SPAN / period), 'joint states in %g simulated s' % SPAN)
         gaps = {round((b - a) * 1e-9, 9) for a, b in zip(stamps, stamps[1:])}
         self.assertEqual(gaps, {round(period, 9)}, 'the gaps between consecutive stamps (s)')
@@ -106,9 +116,11 @@ class SimClockTest(unittest.TestCase):
     def test_the_gripper_status_comes_at_50_hz_of_simulated_time(self):
         with self.streams.lock:
             received = [t for t in self.streams.gripper if self.start <= t < self.end]
-        # Received, not stamped (the register message has no header): a status published at the
-        # window's edge may arrive on either side of it.
-        self.assertAlmostEqual(len(received), SPAN / GRIPPER_PERIOD, delta=1)
+        # Received, not stamped (the register message has no header): a node running late serves the
+        # ticks it missed at once, so a window of receipt times is off by the node's lag at its two
+        # edges, a few ticks on a saturated machine. A node that dropped the late ticks (rospy.Rate)
+        # falls short by the lag's whole sum instead.
+        self.assertAlmostEqual(len(received), SPAN / GRIPPER_PERIOD, delta=GRIPPER_EDGES)
 
     def test_the_reported_real_time_factor_is_what_clock_and_the_wall_clock_show(self):
         # The node's factor is over the last 3 wall-clock s before it reports; the same window from
@@ -127,7 +139,7 @@ class SimClockTest(unittest.TestCase):
             self.assertAlmostEqual(reported, measured, delta=0.1 * measured,
                                    msg='reported %.3f, /clock over the wall clock %.3f' % (reported, measured))
             checked += 1
-        self.assertGreater(checked, 3, 'diagnostics with a whole window of /clock beside them')
+        self.assertGreaterEqual(checked, REPORTS, 'diagnostics with a whole window of /clock beside them')
         rospy.loginfo('sim_clock_check: /clock ran at %.2f x the wall clock (real_time_factor 0, %g Hz)'
                       % (measured, self.loop_hz))
 
