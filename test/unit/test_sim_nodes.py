@@ -471,3 +471,15 @@ def test_joint_states_bad_calibration_is_one_line(values):
     with pytest.raises(sim_params.ParamError) as error:
         gripper_joint_states.scale_from_params(params(**values))
     assert str(error.value).startswith('~gpo_') and '\n' not in str(error.value)
+
+
+def test_on_the_simulated_clock_a_readings_noise_is_fixed_by_its_time():
+    settings = ft300_sim.FT300Settings.from_params(params())
+    one, other = ft300_sim.SensorModel(settings), ft300_sim.SensorModel(settings)
+    true = (0.0, 0.0, 9.5615, 0.0, 0.0, 0.0)
+    forward = [one.read(true, index) for index in range(1000, 1600)]
+    backward = [other.read(true, index) for index in reversed(range(1000, 1600))][::-1]
+    assert forward == backward  # the same time, the same reading, in whatever order it is asked
+    forces = np.array(forward)[:, :3] - true[:3]
+    assert np.allclose(forces.std(axis=0), settings.noise_force, rtol=0.15)  # still the datasheet's noise
+    assert one.read(true, 1000) != one.read(true, 1001)

@@ -135,6 +135,9 @@ def _searching_get_param(rospy):
 # Noise is drawn for this many readings at once: a numpy call per reading
 # cost more than the rest of the reading.
 NOISE_BLOCK = 256
+# On the simulated clock the noise of each reading is fixed by its time: blocks of it drawn from
+# generators seeded by (this, the block's number), so a run repeats exactly.
+NOISE_SEED = 300
 
 # The stream's resolution (rq_sensor_com.cpp divides its 16-bit counts by 100
 # for forces and by 1000 for torques).
@@ -168,6 +171,7 @@ class SensorModel(object):
         self._noisy = bool(settings.noise_force or settings.noise_torque)
         self._sigma = np.array([settings.noise_force] * 3 + [settings.noise_torque] * 3)
         self._noise = []  # pre-drawn noise rows: one numpy call per NOISE_BLOCK readings
+        self._indexed_block, self._indexed_noise = None, None  # the same, by reading number
         self._offset = (0.0,) * 6
 
     def read_quaternion(self, x, y, z, w):
@@ -184,8 +188,13 @@ class SensorModel(object):
         return wrench_model.gravity_wrench(2.0 * (y * w - x * z), -2.0 * (y * z + x * w),
                                            2.0 * (x * x + y * y) - 1.0, self._mass, self._com)
 
-    def read(self, true):
-        """(fx, fy, fz, tx, ty, tz), as the device sends it, for the true wrench `true` (six floats)."""
+    def read(self, true, index=None):
+        """(fx, fy, fz, tx, ty, tz), as the device sends it, for the true wrench `true` (six floats).
+
+        `index`: the reading's number on the simulated clock (its stamp over the period), which picks
+        its noise: the same simulated time gets the same noise in every run, however the processes
+        were scheduled. None: the next of this sensor's own noise sequence (the wall clock).
+        """
         if self._zero_requested:
             # As rq_sensor_com does: the reading before the request becomes the zero.
             # Its noise-free value is taken, what the noise averages out to.
@@ -194,10 +203,23 @@ class SensorModel(object):
         self.last_true = true
         values = true
         if self._noisy:
-            if not self._noise:
-                self._noise = (self.rng.standard_normal((NOISE_BLOCK, 6)) * self._sigma).tolist()
-            values = [v + n for v, n in zip(true, self._noise.pop())]
+            if index is None:
+                if not self._noise:
+                    self._noise = (self.rng.standard_normal((NOISE_BLOCK, 6)) * self._sigma).tolist()
+                row = self._noise.pop()
+            else:
+                row = self._noise_at(int(index))
+            values = [v + n for v, n in zip(true, row)]
         return as_device_sends([v - o for v, o in zip(values, self._offset)])
+
+    def _noise_at(self, index):
+        """The noise row of reading `index`: block index // NOISE_BLOCK drawn from a generator seeded by it."""
+        block = index // NOISE_BLOCK
+        if self._indexed_block != block:
+            rng = np.random.default_rng((NOISE_SEED, block))
+            self._indexed_noise = (rng.standard_normal((NOISE_BLOCK, 6)) * self._sigma).tolist()
+            self._indexed_block = block
+        return self._indexed_noise[index % NOISE_BLOCK]
 
     def request_zero(self):
         """SET_ZERO: the next reading and those after it are relative to the current one."""
@@ -414,6 +436,7 @@ def run(rospy):
     message.header.frame_id = settings.frame_id
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
     lost = []
+    period_ns = int(round(1e9 / settings.rate))
 
     def step(now=None):
         try:
@@ -422,7 +445,7 @@ def run(rospy):
             lost.append(link.lost_cell(rospy, 'ft300_sim', exc))
             return
         for stamp, true in readings:
-            fx, fy, fz, tx, ty, tz = sensor.read(true)
+            fx, fy, fz, tx, ty, tz = sensor.read(true, stamp.to_nsec() // period_ns if sim_time else None)
             stream.Fx, stream.Fy, stream.Fz, stream.Mx, stream.My, stream.Mz = fx, fy, fz, tx, ty, tz
             sensor_publisher.publish(stream)
             message.header.stamp = stamp
