@@ -20,6 +20,7 @@ from controller_manager_msgs.srv import ListControllers, SwitchController, Switc
 from std_msgs.msg import Bool, String
 from std_srvs.srv import Trigger
 
+from ur3_ft_gripper_testing import cpu_load
 from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for, wait_for_subscribers
 from ur3_ft_gripper_testing.ur_driver import HW
 
@@ -240,4 +241,6 @@ class DocumentedInterfaceTest(unittest.TestCase):
 
 if __name__ == '__main__':
     rospy.init_node('ur_driver_interface_check')
-    rostest.rosrun('ur3_ft_gripper_description', 'ur_driver_interface_check', DocumentedInterfaceTest)
+    # ~cpu_load: one busy process per core beside the cell while the tests run, as on a shared CI runner.
+    with cpu_load.CpuLoad() if rospy.get_param('~cpu_load', False) else cpu_load.NoLoad():
+        rostest.rosrun('ur3_ft_gripper_description', 'ur_driver_interface_check', DocumentedInterfaceTest)

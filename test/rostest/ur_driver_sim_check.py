@@ -37,7 +37,7 @@ from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSl
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
 from ur3_ft_gripper_description.model.names import PADS
-from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing import cpu_load, rostest_helpers
 from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_testing.ur_driver import AWAY, COMMANDING, HOME, HW, JOINTS
 
@@ -611,5 +611,7 @@ class TrajectorySuite(JointTrajectoryTest, GenerationTest):
 if __name__ == '__main__':
     rospy.init_node('ur_driver_sim_check')
     suite = rospy.get_param('~suite', 'full')
-    rostest.rosrun('ur3_ft_gripper_description', 'ur_driver_sim_' + suite,
-                   TrajectorySuite if suite == 'trajectories' else FullSuite)
+    # ~cpu_load: one busy process per core beside the cell while the tests run, as on a shared CI runner.
+    with cpu_load.CpuLoad() if rospy.get_param('~cpu_load', False) else cpu_load.NoLoad():
+        rostest.rosrun('ur3_ft_gripper_description', 'ur_driver_sim_' + suite,
+                       TrajectorySuite if suite == 'trajectories' else FullSuite)

@@ -1,14 +1,11 @@
 """Busy processes beside a test, as on a shared CI runner: one CPU-bound loop per core.
 
-`CpuLoad` starts them and stops them (a context manager); `main()` runs them
-until killed, for a launch file's node (test/rostest/cpu_load.py). Each
-process spins in plain Python arithmetic and ends when its parent is gone.
+`CpuLoad` starts them and stops them (a context manager; `NoLoad` is the
+quiet machine's). Each process spins in plain Python arithmetic and ends when
+its parent is gone.
 """
 import multiprocessing
 import os
-import signal
-import sys
-import time
 
 
 def _spin(parent):
@@ -44,14 +41,11 @@ class CpuLoad(object):
         return False
 
 
-def main():
-    """Spin one process per core until SIGTERM or SIGINT (roslaunch stops its nodes with them)."""
-    stop = []
-    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
-    signal.signal(signal.SIGINT, lambda *_: stop.append(1))
-    with CpuLoad() as load:
-        print('cpu_load: %d busy processes' % load.count)
-        sys.stdout.flush()
-        while not stop:
-            time.sleep(0.2)
-    return 0
+class NoLoad(object):
+    """The quiet machine: nothing started."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
