@@ -1,25 +1,29 @@
-"""The physics cell's arm, mass and safety against the model's figures and the robot's behaviour.
+"""The physics cell's arm, mass, safety and clock against the model's figures and the robot's behaviour.
 
 Known truths: the masses of ur_description and of Robotiq's manual, the gravity torques the
 URDF's masses make at a pose (its own forward kinematics), commanded speeds, the servoj lag law
-of the kinematic simulation, and the force limit of the protective stop.
+of the kinematic simulation, the force limit of the protective stop, and the FT 300's samples
+counted in whole timesteps of simulated time.
 """
 import ast
 import math
 import os
+import shutil
 import subprocess
 import sys
+import tempfile
 
 import numpy as np
 import pytest
 import rospkg
 import yaml
 
-from conftest import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_description.devices.ur_arm import joints
 from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
-from ur3_ft_gripper_description.model import inertials
+from ur3_ft_gripper_description.model import description, export, inertials, mjcf
+from ur3_ft_gripper_testing.physics import ARM_JOINTS, START, STANDARD_GRAVITY, TABLE, Arm, close_on
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
 
@@ -122,10 +126,32 @@ def test_servo_follows_streamed_positions_with_servojs_lag(make_cell):
     assert worst < 0.0005, 'the servo strayed %.4f rad from the lag law' % worst
 
 
-def test_pushing_into_the_table_reports_a_protective_stop_and_the_arm_stops_pressing(make_cell):
+@pytest.fixture(scope='module')
+def make_cell_without_ft300(mujoco, tmp_path_factory):
+    """make_cell_without_ft300(world text) -> a Cell of the UR3 with the 2F-140 on its flange, no FT 300."""
+    from ur3_ft_gripper_description.devices.physics.cell import Cell
+    folder = tempfile.mkdtemp(prefix='ur3_ft_gripper_physics_')
+    mappings = export.model_mappings(ft_sensor=False)
+    doc = description.expand_model(mappings)
+    path = os.path.join(folder, 'robot.xml')
+    mjcf.write_mjcf(doc, mappings, path)
+    urdf = description.to_xml(doc)
+
+    def make(world_text):
+        world = tmp_path_factory.mktemp('world') / 'world.yaml'
+        world.write_text(world_text)
+        return Cell(path, urdf, load_world(str(world)), initial_arm=START)
+    yield make
+    shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.mark.parametrize('ft300', [True, False], ids=['with_the_ft300', 'without_it'])
+def test_pushing_into_the_table_reports_a_protective_stop_and_the_arm_stops_pressing(make_cell,
+                                                                                     make_cell_without_ft300, ft300):
     """The joint-motion seam's side: the step in which the contact force passed 150 N reports it (the
-    core latches it, test below); the cell then holds the arm where it stopped, so the force drops."""
-    cell = make_cell(TABLE, START)
+    core latches it, test below); the cell then holds the arm where it stopped, so the force drops.
+    Without the FT 300, whose force sensor made MuJoCo compute the bodies' contact forces, the same."""
+    cell = make_cell(TABLE, START) if ft300 else make_cell_without_ft300(TABLE)
     arm = Arm(cell)
     close_on(cell, 60.0, speed=0.25)
     forces, reasons = [], []
@@ -205,6 +231,107 @@ def test_the_default_world_loads_with_objects_the_gripper_can_hold(make_cell):
         assert np.linalg.norm(cell.object_pose(name)[0] - start[name]) < 0.001, name  # resting
         reach = math.hypot(*start[name][:2])
         assert reach < 0.45, '%s is %.2f m from the base: beyond the UR3 with the tool down' % (name, reach)
+
+
+FT_FRAME = 'robotiq_ft_frame_id'
+WRENCH_PERIOD = 0.01  # the FT 300's 100 Hz
+
+
+def hanging_weight(urdf_text):
+    """The tool side's weight (N) on the FT 300: the URDF's masses below its sensor frame."""
+    mass, _ = inertials.mass_below(kinematics.Model(urdf_text), FT_FRAME)
+    return mass * STANDARD_GRAVITY
+
+
+def timesteps(cell, samples):
+    """The whole number of timesteps of each sample's time."""
+    return [int(round(t / cell.timestep)) for t, _ in samples]
+
+
+@pytest.mark.parametrize('calls', [(0.008,), (0.002,), (0.003, 0.0131, 0.0039)],
+                         ids=['cb3_8ms', 'e_series_2ms', 'late_and_irregular'])
+def test_wrench_samples_come_one_per_period_of_simulated_time_each_the_hanging_grippers_weight(
+        make_cell, robot, calls):
+    """Two simulated seconds, whatever the calls of step() and however seldom they are taken: 200
+    samples, stamped exactly 5 timesteps apart (in whole timesteps, no float drift), none lost or
+    twice, each the 2F-140's weight hanging below the FT 300 (the URDF's masses)."""
+    cell = make_cell('', START)
+    Arm(cell).hold(1.0)  # at rest; 1 s is a whole multiple of 10 ms
+    first = int(round(cell.time / cell.timestep))
+    assert cell.time == first * cell.timestep
+    cell.keep_wrench_samples(WRENCH_PERIOD)
+    samples = []
+    for k in range(int(round(2.0 / sum(calls))) * len(calls)):
+        cell.step(calls[k % len(calls)])
+        if k % 7 == 6:  # a node that asks now and then
+            taken, dropped = cell.take_wrench_samples()
+            assert dropped == 0
+            samples += taken
+    taken, dropped = cell.take_wrench_samples()
+    samples += taken
+    assert dropped == 0 and len(samples) == 200
+    assert timesteps(cell, samples) == list(range(first + 5, first + 1001, 5))
+    assert [t for t, _ in samples] == [n * cell.timestep for n in timesteps(cell, samples)]
+    assert samples[-1][0] == cell.time
+    weight = hanging_weight(robot[1])
+    for _, (fx, fy, fz, tx, ty, tz) in samples:
+        assert fz == pytest.approx(weight, rel=0.005) and abs(fx) < 0.01 and abs(fy) < 0.01
+    assert samples[-1][1] == tuple(cell.wrench())  # the last one is the reading of its time
+
+
+def test_each_wrench_sample_is_the_reading_at_its_own_timestep(make_cell):
+    """The fingers closing shake the tool side, so the reading changes at every timestep: a cell stepped
+    in 8 ms calls (a CB3's; 10 ms falls inside them) keeps at every 10 ms exactly the reading that the
+    same cell stepped one timestep a call shows at that time."""
+    keeping, reading = make_cell('', START), make_cell('', START)
+    for cell in (keeping, reading):
+        cell.command_finger(0.0, 0.15, 60.0)
+    keeping.keep_wrench_samples(WRENCH_PERIOD)
+    readings = {}
+    for _ in range(75):  # 0.6 s, the fingers moving all along
+        keeping.step(0.008)
+        for _ in range(4):
+            reading.step(0.002)
+            readings[int(round(reading.time / reading.timestep))] = tuple(reading.wrench())
+    samples, dropped = keeping.take_wrench_samples()
+    assert dropped == 0 and timesteps(keeping, samples) == list(range(5, 301, 5))
+    assert [wrench for _, wrench in samples] == [readings[n] for n in range(5, 301, 5)]
+    assert all(readings[n] != readings[n - 1] for n in range(5, 301, 5)), 'one timestep off would go unseen'
+
+
+def test_beyond_their_bound_the_oldest_wrench_samples_are_dropped_and_counted(make_cell):
+    cell = make_cell('', START)
+    cell.keep_wrench_samples(WRENCH_PERIOD, keep=50)
+    cell.step(1.0)  # 100 samples
+    samples, dropped = cell.take_wrench_samples()
+    assert dropped == 50 and timesteps(cell, samples) == list(range(255, 501, 5))  # the newest 50
+    cell.step(0.1)
+    samples, dropped = cell.take_wrench_samples()
+    assert dropped == 0 and timesteps(cell, samples) == list(range(505, 551, 5))
+    cell.keep_wrench_samples(2 * WRENCH_PERIOD)  # another period: kept anew from now
+    cell.step(0.1)
+    samples, dropped = cell.take_wrench_samples()
+    assert dropped == 0 and timesteps(cell, samples) == list(range(560, 601, 10))
+
+
+@pytest.mark.parametrize('period', [0.003, 0.0101, 0.0, -0.01, float('nan')])
+def test_a_wrench_sample_period_of_no_whole_number_of_timesteps_is_refused_in_one_line(make_cell, period):
+    cell = make_cell('', START)
+    with pytest.raises(ValueError) as raised:
+        cell.keep_wrench_samples(period)
+    text = str(raised.value)
+    assert repr(period) in text and repr(cell.timestep) in text and '\n' not in text
+    with pytest.raises(ValueError) as raised:
+        cell.take_wrench_samples()
+    assert 'keep_wrench_samples' in str(raised.value)
+
+
+def test_without_the_ft300_wrench_samples_are_refused_as_the_wrench_is(make_cell_without_ft300):
+    cell = make_cell_without_ft300('')
+    for ask in (cell.wrench, lambda: cell.keep_wrench_samples(WRENCH_PERIOD)):
+        with pytest.raises(ValueError) as raised:
+            ask()
+        assert str(raised.value) == 'the model has no FT 300'
 
 
 def run_python(code):

@@ -1,14 +1,18 @@
 """The link between the cell (the arm's process) and the FT 300 and 2F-140 nodes' processes."""
+import itertools
 import json
 import os
 import stat
 import subprocess
 import sys
+import time
 
 import pytest
 
-from conftest import START, Served
-from ur3_ft_gripper_description.devices.physics.link import CellClient, CellServer, LinkError
+from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_description.devices.physics.link import VERSION, CellClient, CellServer, LinkError
+from ur3_ft_gripper_description.model import inertials
+from ur3_ft_gripper_testing.physics import START, STANDARD_GRAVITY, Served
 
 # A node's side, in a process of its own: hello, the wrench, then close the fingers and wait.
 NODE = '''
@@ -62,6 +66,62 @@ def test_a_wrong_key_or_request_is_refused_in_one_line(served):
         client._ask('teleport', 1.0)
     assert 'unknown request' in str(raised.value) and '\n' not in str(raised.value)
     assert client.wrench()[1][2] > 0  # the link still serves
+    client.close()
+
+
+def sample_timesteps(samples, timestep):
+    return [int(round(t / timestep)) for t, _ in samples]
+
+
+def test_the_ft_node_receives_every_wrench_sample_once_however_late_it_asks(served, robot):
+    """The FT 300's node asks for the 10 ms samples now and then, as late as its process runs, while the
+    arm's loop steps the cell in 8 ms cycles: one sample per 10 ms of simulated time, stamped exactly
+    there, none lost or twice, each the hanging 2F-140's weight (the URDF's masses)."""
+    cell, server = served
+    client = CellClient(server.path, authkey=b'key')
+    timestep = client.info['timestep']
+    assert timestep == cell.timestep
+    deadline = time.monotonic() + 120.0  # only against a cell that stopped: the loops end on simulated time
+    while client.wrench()[0] < 1.0 and time.monotonic() < deadline:
+        time.sleep(0.01)  # the arm at rest at its start pose
+    started, samples, dropped = client.wrench_samples(0.01)  # starts the keeping: none yet
+    assert samples == [] and dropped == 0
+    kept, now, waits = [], started, itertools.cycle([0.0, 0.013, 0.002, 0.031])
+    while now < started + 1.0 and time.monotonic() < deadline:
+        time.sleep(next(waits))
+        now, samples, dropped = client.wrench_samples(0.01)
+        assert dropped == 0
+        kept += samples
+    first = (int(round(started / timestep)) // 5 + 1) * 5
+    steps = sample_timesteps(kept, timestep)
+    assert steps == list(range(first, steps[-1] + 1, 5)) and len(steps) >= 100
+    assert [t for t, _ in kept] == [n * timestep for n in steps]
+    assert kept[-1][0] <= now < kept[-1][0] + 0.01
+    mass, _ = inertials.mass_below(kinematics.Model(robot[1]), client.info['ft_frame'])
+    assert all(wrench[2] == pytest.approx(mass * STANDARD_GRAVITY, rel=0.005) for _, wrench in kept)
+    # Another period starts the keeping anew at it.
+    started, samples, dropped = client.wrench_samples(0.02)
+    assert samples == [] and dropped == 0
+    kept = []
+    while now < started + 0.1 and time.monotonic() < deadline:
+        now, samples, dropped = client.wrench_samples(0.02)
+        kept += samples
+    first = (int(round(started / timestep)) // 10 + 1) * 10
+    steps = sample_timesteps(kept, timestep)
+    assert steps == list(range(first, steps[-1] + 1, 10)) and len(steps) >= 5
+    client.close()
+
+
+def test_a_wrench_sample_period_of_no_whole_number_of_timesteps_is_refused_in_one_line(served):
+    cell, server = served
+    client = CellClient(server.path, authkey=b'key')
+    with pytest.raises(LinkError) as raised:
+        client.wrench_samples(0.003)
+    assert '0.003' in str(raised.value) and '0.002' in str(raised.value) and '\n' not in str(raised.value)
+    assert client.wrench_samples(0.01)[2] == 0  # the link still serves
+    with pytest.raises(LinkError) as raised:
+        client._ask('hello', VERSION - 1)
+    assert 'link version %d' % VERSION in str(raised.value)
     client.close()
 
 

@@ -13,7 +13,11 @@
   the sensor's axes, with the sign of ``devices/wrench_model.py`` (what the
   tool side exerts on the sensor: a hanging mass pulls along +z when the
   sensor's z points down): the tool side's weight and inertia, contacts, and
-  whatever the fingers hold;
+  whatever the fingers hold; and ``keep_wrench_samples(period)``, after which
+  the cell records that reading at every simulated time that is a whole
+  multiple of `period`, for ``take_wrench_samples()``: the FT 300's node
+  publishes one reading per period of simulated time, stamped with it,
+  however late its own process runs;
 * the 2F-140: ``command_finger(opening, speed, force)`` moves a target along
   the pad gap at `speed`, which finger_joint's servo follows with its torque
   capped at what squeezes with `force` (by virtual work, the torque is the
@@ -21,8 +25,12 @@
   ``finger()`` says where the fingers are and whether they reached the
   target, stopped on an object, or are moving;
 * the world: ``object_pose(name)``.
+
+Time is counted in whole timesteps (``time`` is their number times the
+timestep, without the drift of a float summed step by step).
 """
 
+import collections
 import math
 import os
 import shutil
@@ -92,11 +100,18 @@ class Cell(object):
         self.data = self.mujoco.MjData(self.model)
         # The arrays stepped through at every timestep, taken once: each attribute access makes a new view.
         self._ctrl, self._qpos, self._qvel = self.data.ctrl, self.data.qpos, self.data.qvel
-        self._cfrc_ext = self.data.cfrc_ext
+        self._cfrc_ext, self._sensordata = self.data.cfrc_ext, self.data.sensordata
         self._actfrcrange = self.model.jnt_actfrcrange
         self.timestep = float(self.model.opt.timestep)
+        self._steps = 0  # timesteps taken: the time without a float's summed rounding
         self._debt = 0.0
         m = self.model
+        # MuJoCo computes the bodies' contact forces (cfrc_ext) only for a sensor that needs them: the
+        # FT 300's. Without one, the cell has them computed after each timestep, for the protective stop.
+        needs = {int(self.mujoco.mjtSensor.mjSENS_FORCE), int(self.mujoco.mjtSensor.mjSENS_TORQUE),
+                 int(self.mujoco.mjtSensor.mjSENS_ACCELEROMETER), int(self.mujoco.mjtSensor.mjSENS_FRAMELINACC),
+                 int(self.mujoco.mjtSensor.mjSENS_FRAMEANGACC)}
+        self._compute_contact_forces = not needs.intersection(int(t) for t in m.sensor_type)
 
         # -- the arm: every position servo with a velocity gain beside it
         self.finger_joint = prefix + FINGER_JOINT
@@ -108,13 +123,32 @@ class Cell(object):
         self._arm_qpos = _index([m.jnt_qposadr[j] for j in joint_ids])
         self._arm_dofs = _index([m.jnt_dofadr[j] for j in joint_ids])
         self._arm_kp = np.array([m.actuator(n).gainprm[0] for n in self.arm_joints])
+        # Views of the arm's parts of ctrl and of the dofs' arrays, which MuJoCo's vector functions write
+        # into at every timestep: export_mjcf writes the arm's joints and servos in order.
+        if not all(isinstance(ids, slice) for ids in (self._arm_position_ctrl, self._arm_velocity_ctrl,
+                                                       self._arm_dofs)):
+            raise ValueError('the arm\'s joints %s are not consecutive joints with consecutive servos in the '
+                             'model: a model that export_mjcf did not write?' % ', '.join(self.arm_joints))
+        self._arm_position_servo = self._ctrl[self._arm_position_ctrl]
+        self._arm_velocity_servo = self._ctrl[self._arm_velocity_ctrl]
+        # The inertia feedforward's acceleration and torque of every dof, made once, and their arm parts;
+        # 1 / kp as a diagonal matrix, which turns a torque into the position servo's offset.
+        self._feedforward, self._feedforward_torque = np.zeros(m.nv), np.zeros(m.nv)
+        self._arm_feedforward = self._feedforward[self._arm_dofs]
+        self._arm_feedforward_torque = self._feedforward_torque[self._arm_dofs]
+        self._inverse_kp = np.diag(1.0 / self._arm_kp)
+        # How far the servos' reference goes over a step() call, and where it starts (feedforward included).
+        self._reference_change, self._reference_origin = np.zeros(len(self.arm_joints)), np.zeros(len(self.arm_joints))
         self.arm_lower = np.array([m.jnt_range[j][0] for j in joint_ids])
         self.arm_upper = np.array([m.jnt_range[j][1] for j in joint_ids])
         self.urdf_text = urdf_text
         urdf = kinematics.Model(urdf_text)
         self.arm_velocity_limits = np.array([urdf.joints[n].limit.velocity for n in self.arm_joints])
         self.robot_bodies = np.array([m.body(n).id for n in robot_bodies])
-        self._robot_bodies = _index(self.robot_bodies)
+        # The robot's net external wrench (cfrc_ext's sum over its bodies) is this row times cfrc_ext.
+        self._robot_rows = np.zeros(m.nbody)
+        self._robot_rows[self.robot_bodies] = 1.0
+        self._net_wrench = np.zeros(6)
         self.protective_stop_force = float(self.figures['arm']['protective_stop_force'])
         self.protective_stop = None
 
@@ -126,6 +160,9 @@ class Cell(object):
                                 m.sensor_adr[m.sensor(frame + mjcf.FORCE_SUFFIX).id] + 3)
             self._torque = slice(m.sensor_adr[m.sensor(frame + mjcf.TORQUE_SUFFIX).id],
                                  m.sensor_adr[m.sensor(frame + mjcf.TORQUE_SUFFIX).id] + 3)
+        self.wrench_sample_period = None
+        self._wrench_samples, self._wrench_dropped = collections.deque(), 0
+        self._sample_every = self._next_sample = None
 
         # -- the 2F-140
         self.gripper = None
@@ -133,6 +170,16 @@ class Cell(object):
             self.gripper = GripperKinematics(urdf_text, prefix)
             self.gripper_base = self.gripper.model.joints[self.finger_joint].parent
             self._rates = np.abs(np.gradient(self.gripper.openings, self.gripper.angles))
+            # The finger drive's tables as Python lists, for a lookup at every timestep without numpy's
+            # per-call cost (np.interp's own arithmetic: rate = slope * (angle - angle_j) + rate_j).
+            self._rate_angles, self._rate_values = self.gripper.angles.tolist(), self._rates.tolist()
+            self._rate_spacing = (len(self._rate_angles) - 1) / (self._rate_angles[-1] - self._rate_angles[0])
+            self._rate_slopes = ((self._rates[1:] - self._rates[:-1]) /
+                                 (self.gripper.angles[1:] - self.gripper.angles[:-1])).tolist()
+            self._finger_segment = (0.0, 0.0, 0.0, 0.0, 0.0)  # none yet: the first timestep finds its own
+            self._increasing_openings = -self.gripper.openings  # GripperKinematics.angle's table, made once
+            self._unit_range = np.array([-1.0, 1.0])  # times the torque cap: the drive's force range
+            self._finger_still = False  # whether the drive's velocity input is 0 since the ramp's end
             joint = m.joint(self.finger_joint).id
             self._finger_joint = joint
             self._finger_qpos = m.jnt_qposadr[joint]
@@ -140,6 +187,7 @@ class Cell(object):
             self._finger_ctrl = m.actuator(self.finger_joint).id
             self._finger_velocity_ctrl = m.actuator(self.finger_joint + mjcf.VELOCITY_SUFFIX).id
             m.jnt_actfrclimited[joint] = 1
+            self._finger_torque_range = self._actfrcrange[joint]
             gripper = self.figures['gripper']
             self.grip_force_range = (float(gripper['grip_force_min']), float(gripper['grip_force_max']))
             self.finger_tolerance = float(gripper['target_tolerance'])
@@ -200,7 +248,8 @@ class Cell(object):
         if self.gripper is not None:
             opening = self.gripper.opening(d.qpos[self._finger_qpos])
             self._finger.update(target=opening, ramp=opening)
-            self._drive_finger(0.0)
+            self._ramp_finger(0.0)
+            self._limit_finger_torque()
         self.mujoco.mj_forward(m, d)
         depths = [self._contact_depth(i) for i in range(d.ncon)]
         problem = overlap_problem(self.world, [p for p in depths if p is not None], OVERLAP_TOLERANCE)
@@ -223,49 +272,109 @@ class Cell(object):
 
     @property
     def time(self):
-        return float(self.data.time)
+        """Simulated time (s): the timesteps taken times the timestep."""
+        return self._steps * self.timestep
 
     def step(self, dt):
         """Let `dt` seconds pass in whole timesteps (the remainder is carried over); returns how many."""
+        # This loop is the cell's whole cost beside MuJoCo's (bench/physics.py measures the two side by
+        # side): at every timestep only what changes from one to the next, and MuJoCo's own vector
+        # functions (mju_*) rather than numpy's, which cost several times more between two MuJoCo steps
+        # (neither's code nor data is still in the processor's caches there).
+        timestep = self.timestep
         self._debt += max(float(dt), 0.0)
-        steps = int(math.floor(self._debt / self.timestep + 1e-9))
-        self._debt -= steps * self.timestep
-        start = self._reference
-        change = self._next_reference - start
-        moving = steps and change.any()
-        # The servo's inertia feedforward: the torque that accelerating the arm along the reference
-        # takes (mass matrix, armature included, times the reference's acceleration), given as an
-        # offset of the position servo's reference.
-        acceleration = None
-        if steps and (self._reference_velocity != self._previous_velocity).any():
-            acceleration = np.zeros(self.model.nv)
-            acceleration[self._arm_dofs] = (self._reference_velocity - self._previous_velocity) / (
-                steps * self.timestep)
-            torque = np.zeros(self.model.nv)
+        steps = int(self._debt / timestep + 1e-9)
+        if not steps:
+            return 0
+        self._debt -= steps * timestep
         mujoco, model, data = self.mujoco, self.model, self.data
-        ctrl, positions = self._ctrl, self._arm_position_ctrl
-        ctrl[self._arm_velocity_ctrl] = self._reference_velocity
         # A protective stop already holding the arm keeps its hold reference for the whole call; one
         # tripped in a substep holds the arm from the next substep on.
         following = self.protective_stop is None
+        change = None  # how far the reference goes over the call, when it moves
+        if following:
+            start, velocity = self._reference, self._reference_velocity
+            servo, start_list, velocity_list = self._arm_position_servo, start.tolist(), velocity.tolist()
+            origin = start  # the position servos' reference at the call's first substep
+            # The reference goes linearly from start to its next position over the call's substeps
+            # (the first substep has start itself: one substep needs no interpolation).
+            if steps > 1 and self._next_reference.tolist() != start_list:
+                change = self._reference_change
+                mujoco.mju_sub(change, self._next_reference, start)
+            if velocity_list != self._previous_velocity_list:
+                # The servo's inertia feedforward: the torque that accelerating the arm along the reference
+                # takes (mass matrix, armature included, times the reference's acceleration), given as an
+                # offset of the position servo's reference. Once a call, at the state it starts from: a
+                # robot's controller computes it once a control cycle.
+                acceleration = self._arm_feedforward
+                mujoco.mju_sub(acceleration, velocity, self._previous_velocity)
+                mujoco.mju_scl(acceleration, acceleration, 1.0 / (steps * timestep))
+                mujoco.mj_mulM(model, data, self._feedforward_torque, self._feedforward)
+                origin = self._reference_origin
+                mujoco.mju_mulMatVec(origin, self._inverse_kp, self._arm_feedforward_torque)
+                mujoco.mju_addTo(origin, start)
+                mujoco.mju_copy(self._arm_velocity_servo, velocity)  # else it holds this velocity already
+            if change is not None:
+                self._servo_holds = None
+            elif origin is not start:
+                mujoco.mju_copy(servo, origin)
+                self._servo_holds = None
+            elif self._servo_holds != start_list:
+                mujoco.mju_copy(servo, start)
+                self._servo_holds = start_list
+            limit = self.protective_stop_force
+            net, robot_rows, cfrc_ext = self._net_wrench, self._robot_rows, self._cfrc_ext
+        gripper = self.gripper is not None
+        if gripper:
+            finger, ctrl = self._finger, self._ctrl
+            ramping = finger['ramp'] != finger['target'] or finger['angle'] is None
+            still, stalled, force = self._finger_still, finger['stalled'], finger['force']
+            qpos, qvel, finger_qpos, finger_dof = self._qpos, self._qvel, self._finger_qpos, self._finger_dof
+            cap, unit = self._finger_torque_range, self._unit_range
+            # The rates' table segment the fingers are in: gripping, they stay in it for many timesteps.
+            low, high, base, slope, rate = self._finger_segment
+        compute_contact_forces = self._compute_contact_forces
+        count, next_sample = self._steps, self._next_sample
         for k in range(steps):
-            if following:
-                position = start + change * (float(k) / steps) if moving else start
-                if acceleration is not None:
-                    mujoco.mj_mulM(model, data, torque, acceleration)
-                    position = position + torque[self._arm_dofs] / self._arm_kp
-                ctrl[positions] = position
-            if self.gripper is not None:
-                self._drive_finger(self.timestep)
+            if change is not None and following:
+                mujoco.mju_addScl(servo, origin, change, float(k) / steps)
+            if gripper:
+                if ramping:
+                    ramping, still = self._ramp_finger(timestep), False
+                elif not still:
+                    ctrl[self._finger_velocity_ctrl] = 0.0
+                    still = True
+                # The drive's torque cap: what squeezes with the commanded force at this angle.
+                angle = qpos.item(finger_qpos)
+                if not low <= angle < high:
+                    low, high, base, slope, rate = self._rate_segment(angle)
+                mujoco.mju_scl(cap, unit, force * (slope * (angle - base) + rate))
             mujoco.mj_step(model, data)
+            count += 1
+            if compute_contact_forces:
+                mujoco.mj_rnePostConstraint(model, data)
             if following:
-                self._check_contact_force()
-                following = self.protective_stop is None
-            if self.gripper is not None:
-                self._watch_finger()
-        if steps and following:
-            self._reference = self._next_reference.copy()
-            self._previous_velocity = self._reference_velocity.copy()
+                mujoco.mju_mulMatTVec(net, cfrc_ext, robot_rows)
+                _, _, _, fx, fy, fz = net.tolist()
+                if fx * fx + fy * fy + fz * fz > limit * limit:
+                    self._stop(math.sqrt(fx * fx + fy * fy + fz * fz))
+                    following = False
+            if gripper:
+                if abs(qvel.item(finger_dof)) < STALL_SPEED:
+                    stalled += timestep
+                else:
+                    stalled = 0.0
+            if count == next_sample:
+                self._keep_wrench_sample(count)
+                next_sample += self._sample_every
+        self._steps, self._next_sample = count, next_sample
+        if gripper:
+            finger['stalled'], self._finger_still = stalled, still
+            self._finger_segment = low, high, base, slope, rate
+        if following:
+            # No copies: these arrays are replaced, never changed in place.
+            self._reference, self._previous_velocity = self._next_reference, velocity
+            self._previous_velocity_list = velocity_list
         return steps
 
     # -- the arm ------------------------------------------------------------------
@@ -294,8 +403,9 @@ class Cell(object):
         self._reference_velocity = np.array(velocity, dtype=float)
 
     def _set_arm_ctrl(self, position, velocity):
-        self._ctrl[self._arm_position_ctrl] = position
-        self._ctrl[self._arm_velocity_ctrl] = velocity
+        self._arm_position_servo[:] = position
+        self._arm_velocity_servo[:] = velocity
+        self._servo_holds = np.asarray(position).tolist()  # what the position servos hold, if constant
 
     def _hold_reference(self):
         """Hold the arm where it is now."""
@@ -303,19 +413,19 @@ class Cell(object):
         self._next_reference = self._reference.copy()
         self._reference_velocity = np.zeros(len(self._reference))
         self._previous_velocity = self._reference_velocity.copy()
+        self._previous_velocity_list = self._previous_velocity.tolist()
         self._set_arm_ctrl(self._reference, self._reference_velocity)
 
     def contact_force(self):
         """Net force (N, world frame) that the world's contacts put on the robot."""
-        return self._cfrc_ext[self._robot_bodies, 3:].sum(axis=0)
+        net = np.zeros(6)
+        self.mujoco.mju_mulMatTVec(net, self._cfrc_ext, self._robot_rows)
+        return net[3:]
 
-    def _check_contact_force(self):
-        force = self.contact_force()
-        force = math.sqrt(force.dot(force))
-        if force > self.protective_stop_force:
-            self.protective_stop = ('the contact force on the robot, %.0f N, exceeded the %.0f N limit'
-                                    % (force, self.protective_stop_force))
-            self._hold_reference()
+    def _stop(self, force):
+        self.protective_stop = ('the contact force on the robot, %.0f N, exceeded the %.0f N limit'
+                                % (force, self.protective_stop_force))
+        self._hold_reference()
 
     def clear_protective_stop(self):
         """Release the protective stop (the servos then follow the reference again, from where the arm is)."""
@@ -330,6 +440,47 @@ class Cell(object):
             raise ValueError('the model has no FT 300')
         sensordata = self.data.sensordata
         return -np.concatenate((sensordata[self._force], sensordata[self._torque]))
+
+    def keep_wrench_samples(self, period, keep=2000):
+        """From now on, record wrench() at every simulated time that is a whole multiple of `period` (s).
+
+        take_wrench_samples() hands them over; at most `keep` wait there, beyond which the oldest are
+        dropped and counted. `period` must be a whole number of timesteps. Calling again restarts:
+        the samples waiting are discarded.
+        """
+        if self.ft_frame is None:
+            raise ValueError('the model has no FT 300')
+        period = float(period)
+        every = int(round(period / self.timestep)) if period > 0 and math.isfinite(period) else 0
+        if every < 1 or abs(every * self.timestep - period) > 1e-9 * period:
+            raise ValueError('wrench sample period %r s: not a whole number of timesteps of %r s'
+                             % (period, self.timestep))
+        if int(keep) < 1:
+            raise ValueError('keep %r wrench samples: at least one' % (keep,))
+        self.wrench_sample_period, self._sample_every = period, every
+        self._next_sample = (self._steps // every + 1) * every
+        self._wrench_samples, self._wrench_dropped = collections.deque(maxlen=int(keep)), 0
+
+    def take_wrench_samples(self):
+        """(samples, dropped): the samples recorded since the last call and how many of them the bound dropped.
+
+        samples: [(time, (fx, fy, fz, tx, ty, tz)), ...], oldest first, time the timesteps taken times the
+        timestep.
+        """
+        if self.wrench_sample_period is None:
+            raise ValueError('the cell keeps no wrench samples: call keep_wrench_samples first')
+        samples, dropped = list(self._wrench_samples), self._wrench_dropped
+        self._wrench_samples.clear()
+        self._wrench_dropped = 0
+        return samples, dropped
+
+    def _keep_wrench_sample(self, count):
+        sensordata, samples = self._sensordata, self._wrench_samples
+        fx, fy, fz = sensordata[self._force].tolist()
+        tx, ty, tz = sensordata[self._torque].tolist()
+        if len(samples) == samples.maxlen:
+            self._wrench_dropped += 1
+        samples.append((count * self.timestep, (-fx, -fy, -fz, -tx, -ty, -tz)))
 
     # -- the 2F-140 ---------------------------------------------------------------
 
@@ -348,31 +499,47 @@ class Cell(object):
         state['stalled'] = 0.0
 
     def _rate(self, angle):
-        return float(np.interp(angle, self.gripper.angles, self._rates))
+        """d(gap)/d(angle) at `angle`: np.interp in the rates' table, its arithmetic in Python floats."""
+        _, _, base, slope, rate = self._rate_segment(angle)
+        return slope * (angle - base) + rate
 
-    def _drive_finger(self, dt):
+    def _rate_segment(self, angle):
+        """(low, high, base, slope, rate): the rate is slope * (angle - base) + rate for low <= angle < high.
+
+        The table's segment that np.interp takes for `angle` (constant beyond the table's ends). Its angles
+        are evenly spaced: the segment is found from the spacing, then checked against the table.
+        """
+        angles, rates = self._rate_angles, self._rate_values
+        if not angle < angles[-1]:  # at or past the end (or NaN)
+            return angles[-1], math.inf, angles[-1], 0.0, rates[-1]
+        if angle < angles[0]:
+            return -math.inf, angles[0], angles[0], 0.0, rates[0]
+        j = min(int((angle - angles[0]) * self._rate_spacing), len(angles) - 2)
+        while angles[j] > angle:
+            j -= 1
+        while angles[j + 1] <= angle:
+            j += 1
+        return angles[j], angles[j + 1], angles[j], self._rate_slopes[j], rates[j]
+
+    def _ramp_finger(self, dt):
+        """Move the drive's target one timestep along the ramp to the commanded opening; True while short of it."""
         ctrl, state = self._ctrl, self._finger
-        ramp = state['ramp']
-        if ramp != state['target'] or state['angle'] is None:
-            step = state['speed'] * dt
-            delta = state['target'] - ramp
-            ramp = state['target'] if abs(delta) <= step else ramp + math.copysign(step, delta)
-            angle = self.gripper.angle(ramp)
-            ctrl[self._finger_velocity_ctrl] = (angle - ctrl[self._finger_ctrl]) / dt if dt > 0 else 0.0
-            ctrl[self._finger_ctrl] = angle
-            state.update(ramp=ramp, angle=angle)
-        else:
-            ctrl[self._finger_velocity_ctrl] = 0.0
-        limit = state['force'] * self._rate(self._qpos[self._finger_qpos])
-        self._actfrcrange[self._finger_joint, 0] = -limit
-        self._actfrcrange[self._finger_joint, 1] = limit
+        ramp, target = state['ramp'], state['target']
+        step = state['speed'] * dt
+        delta = target - ramp
+        ramp = target if abs(delta) <= step else ramp + math.copysign(step, delta)
+        # GripperKinematics.angle(ramp), its table made once.
+        angle = float(np.interp(-float(ramp), self._increasing_openings, self.gripper.angles))
+        ctrl[self._finger_velocity_ctrl] = (angle - ctrl[self._finger_ctrl]) / dt if dt > 0 else 0.0
+        ctrl[self._finger_ctrl] = angle
+        state.update(ramp=ramp, angle=angle)
+        return ramp != target
 
-    def _watch_finger(self):
-        state = self._finger
-        if abs(self._qvel[self._finger_dof]) < STALL_SPEED:
-            state['stalled'] += self.timestep
-        else:
-            state['stalled'] = 0.0
+    def _limit_finger_torque(self):
+        """Cap the drive's torque at what squeezes with the commanded force at the fingers' angle now."""
+        limit = self._finger['force'] * self._rate(self._qpos.item(self._finger_qpos))
+        self._finger_torque_range[0] = -limit
+        self._finger_torque_range[1] = limit
 
     def finger(self):
         """The FingerState now."""

@@ -20,12 +20,22 @@ masters, each have their own cell, and no parameter is needed.
 
 Protocol: request and reply are tuples, one reply per request, in order.
 
-    ('hello', VERSION)              -> ('hello', VERSION, {'time': s, 'ft_frame': name or None,
+    ('hello', VERSION)              -> ('hello', VERSION, {'time': s, 'timestep': s, 'ft_frame': name or None,
                                         'gripper': None or {'min_opening': m, 'max_opening': m,
                                                             'grip_force_range': (N, N)}})
     ('wrench',)                     -> ('wrench', time, (fx, fy, fz, tx, ty, tz))
                                        the FT 300's reading (N, N m, sensor frame, the tool
-                                       side on the sensor), no zero and no noise: the node's
+                                       side on the sensor), no zero and no noise: those are the node's
+    ('wrench_samples', period)      -> ('wrench_samples', time, [(t, (fx, fy, fz, tx, ty, tz)), ...], dropped)
+                                       the readings at every t that is a whole multiple of
+                                       `period` (s, a whole number of timesteps) since the last
+                                       such request, oldest first, t exact: what the FT 300's
+                                       node publishes, one per period of simulated time stamped
+                                       t, however late its process asks. The first request starts
+                                       the keeping, one with another period starts it anew. At
+                                       most 2000 wait (20 s at 10 ms); `dropped` counts the oldest
+                                       lost beyond. A node started again receives what waited
+                                       since its predecessor's last request: none lost or twice
     ('finger', opening, speed, force) -> ('finger', time, state)
                                        command the fingers (m, m/s, N), then their state
     ('finger',)                     -> ('finger', time, state)     the state alone
@@ -51,7 +61,7 @@ import time
 from multiprocessing import AuthenticationError
 from multiprocessing.connection import Client, Listener
 
-VERSION = 1
+VERSION = 2
 # ur_robot_driver's node, which holds the cell with physics.
 ARM_NODE = 'ur_hardware_interface'
 FOLDER = 'ur3_ft_gripper_cell'
@@ -181,16 +191,23 @@ class CellServer(object):
                 if cell.gripper is not None:
                     gripper = dict(min_opening=cell.gripper.min_opening, max_opening=cell.gripper.max_opening,
                                    grip_force_range=tuple(cell.grip_force_range))
-                return ('hello', VERSION, dict(time=cell.time, ft_frame=cell.ft_frame, gripper=gripper))
+                return ('hello', VERSION, dict(time=cell.time, timestep=cell.timestep, ft_frame=cell.ft_frame,
+                                               gripper=gripper))
             if name == 'wrench' and not arguments:
                 return ('wrench', cell.time, tuple(float(v) for v in cell.wrench()))
+            if name == 'wrench_samples' and len(arguments) == 1:
+                period = float(arguments[0])
+                if cell.wrench_sample_period != period:
+                    cell.keep_wrench_samples(period)
+                samples, dropped = cell.take_wrench_samples()
+                return ('wrench_samples', cell.time, samples, dropped)
             if name == 'finger' and len(arguments) in (0, 3):
                 if arguments:
                     cell.command_finger(*(float(v) for v in arguments))
                 return ('finger', cell.time, dict(vars(cell.finger())))
             if name == 'truth' and not arguments:
                 return ('truth', cell.time, _truth(cell))
-        return ('error', 'unknown request %r: use hello, wrench, finger or truth' % (request,))
+        return ('error', 'unknown request %r: use hello, wrench, wrench_samples, finger or truth' % (request,))
 
 
 def _truth(cell):
@@ -232,6 +249,11 @@ class CellClient(object):
     def wrench(self):
         """(time, (fx, fy, fz, tx, ty, tz)) of the FT 300."""
         return self._ask('wrench')[1:]
+
+    def wrench_samples(self, period):
+        """(time, [(t, (fx, fy, fz, tx, ty, tz)), ...], dropped): the FT 300's readings at every multiple t
+        of `period` since the last call (the first call starts the keeping), and how many were dropped."""
+        return self._ask('wrench_samples', period)[1:]
 
     def finger(self, opening=None, speed=None, force=None):
         """(time, state dict); with opening, speed and force, the fingers are commanded first."""
