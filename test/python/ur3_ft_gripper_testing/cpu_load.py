@@ -6,9 +6,14 @@ its parent is gone.
 """
 import multiprocessing
 import os
+import signal
 
 
 def _spin(parent):
+    # A fork of a rospy node inherits its handlers, which turn SIGTERM into a rospy shutdown that this
+    # loop never looks at: the default ends the process.
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
     x = 0
     while True:
         for _ in range(100000):
@@ -37,6 +42,9 @@ class CpuLoad(object):
             process.terminate()
         for process in self.processes:
             process.join(5)
+            if process.is_alive():
+                process.kill()
+                process.join(5)
         self.processes = []
         return False
 
