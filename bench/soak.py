@@ -105,6 +105,9 @@ def main(argv=None):
     parser.add_argument('--record', help='write the numbers into this RESULTS.md (soak section)')
     parser.add_argument('--max-gap-ms', type=float, default=1e3 * GAP_LIMIT_S,
                         help='largest allowed wrench gap (default: the issue\'s %g ms)' % (1e3 * GAP_LIMIT_S))
+    parser.add_argument('--real-time-factor', type=float, default=1.0,
+                        help='with --what physics: the cell\'s pace on its simulated clock (default 1; 0: as fast '
+                             'as the machine allows)')
     parser.add_argument('--what', choices=('devices', 'arm', 'physics'), default='devices',
                         help='the simulated FT 300 and gripper (default), the simulated arm (bench/soak_arm.py), '
                              'or the cell on physics (bench/soak_physics.py)')

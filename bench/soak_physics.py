@@ -26,6 +26,9 @@ pick_and_weigh = shipped.script('examples/pick_and_weigh.py')
 
 RSS_LIMIT_MB = 5.0
 WEIGHT_TOLERANCE = 0.02
+# The guarded touch's speed (m/s): at full speed the cell runs on while the touch reacts, so it presses
+# slowly enough that a late reaction stays far below the protective stop.
+TOUCH_SPEED = 0.002
 NODES = ('/ur_hardware_interface', '/robotiq_ft_sensor', '/robotiq2FGripper')
 
 
@@ -40,11 +43,16 @@ def run(args, seconds, record_section):
     load_before = benchlib.load_average()
     master = benchlib.use_new_master()
     launch = None
-    problems, rss, cycles, weights, cpu = [], {}, 0, [], None
+    problems, rss, cycles, weights, cpu, simulated = [], {}, 0, [], None, 0.0
     try:
         import rospy
         launch = benchlib.roslaunch('ur3_ft_gripper_description', 'ur3_ft_gripper_bringup.launch', 'sim:=true',
-                                    'physics:=true', log=os.environ.get('SOAK_LOG'))
+                                    'physics:=true', 'real_time_factor:=%g' % args.real_time_factor,
+                                    log=os.environ.get('SOAK_LOG'))
+        # The bring-up sets use_sim_time; this node must start on the same clock as the cell.
+        import rosgraph
+        benchlib.wait_for(lambda: rosgraph.Master('/soak_physics').hasParam('/use_sim_time'),
+                          'the bring-up to set /use_sim_time', 60)
         rospy.init_node('soak_physics', disable_signals=True)
         quiet = lambda text: None  # noqa: E731
         picker = pick_and_weigh.PickAndWeigh(rospy, say=quiet)
@@ -68,8 +76,8 @@ def run(args, seconds, record_section):
                 picker.put_down()
                 shifts.append(math.hypot(*(np.subtract(block_pose(truth)[:2], before[:2]))))
                 toucher.start(*guarded_touch.START_XY)
-                toucher.touch(0.02, 10.0)
-                toucher.back_off(0.02)
+                toucher.touch(TOUCH_SPEED, 10.0)
+                toucher.back_off(TOUCH_SPEED)
                 weights.append(weighed)
                 if abs(weighed - mass) > WEIGHT_TOLERANCE * mass:
                     problems.append('cycle %d: weighed %.4f kg, not %.4f' % (cycles, weighed, mass))
@@ -78,15 +86,17 @@ def run(args, seconds, record_section):
             cycles += 1
             now = time.monotonic()
             if warm is None and now - start >= args.warmup:
-                warm = (now, {n: benchlib.cpu_seconds(p) for n, p in pids.items()}, cycles, len(problems))
+                warm = (now, {n: benchlib.cpu_seconds(p) for n, p in pids.items()}, cycles, len(problems),
+                        truth.truth()[0])
                 rss = {n: [benchlib.rss_mb(p)] for n, p in pids.items()}
             elif warm is not None:
                 for n, p in pids.items():
                     rss[n].append(benchlib.rss_mb(p))
         if warm is None:
             raise RuntimeError('the run ended within the warm-up: give more time than --warmup')
-        cpu = {n: 100.0 * (benchlib.cpu_seconds(p) - warm[1][n]) / (time.monotonic() - warm[0])
-               for n, p in pids.items()}
+        wall = time.monotonic() - warm[0]
+        cpu = {n: 100.0 * (benchlib.cpu_seconds(p) - warm[1][n]) / wall for n, p in pids.items()}
+        simulated = truth.truth()[0] - warm[4]
         measured_cycles = cycles - warm[2]
     finally:
         benchlib.stop(launch)
@@ -110,5 +120,8 @@ def run(args, seconds, record_section):
     return benchlib.report_soak(
         args.record, record_section,
         '## Soak of the physics cell (`bash tools/quickstart soak --what physics`)',
-        'ur3_ft_gripper_bringup.launch sim:=true physics:=true (default world) on its own master, driven through '
-        'the real drivers\' interfaces only.', load_before, rows, problems, 'soak (physics)')
+        'ur3_ft_gripper_bringup.launch sim:=true physics:=true real_time_factor:=%g (default world, on the cell\'s '
+        'simulated clock; simulated seconds over the wall clock\'s: %.2f) on its own master, driven through the '
+        'real drivers\' interfaces only; the guarded touch at %g mm/s.'
+        % (args.real_time_factor, simulated / max(seconds, 1e-9), 1e3 * TOUCH_SPEED),
+        load_before, rows, problems, 'soak (physics)')
