@@ -74,21 +74,16 @@ class ToolKinematics(object):
         return pose
 
     def joints_for(self, pose, seed):
-        """Joint positions (rad) for `pose` near `seed`; CellError if out of reach.
+        """Joint positions (rad) within the limits for `pose`; CellError if out of reach.
 
-        The inverse kinematics is local: it starts from `seed`, and then from `seed` turned about the
-        base (shoulder_pan and wrist_3) toward the pose's direction, which is the near solution for
-        a tool that keeps pointing down.
+        Of the arm's solutions (every branch, found in closed form whatever `seed` is), the one nearest
+        `seed` in the seed's branch, each joint the short way round: a move from `seed` does not swing
+        through a far configuration. Another branch only where the seed's does not reach.
         """
-        seed = np.asarray(seed, dtype=float)
-        here = self.arm.forward(seed)[:3, 3]
-        turn = math.atan2(pose[1, 3], pose[0, 3]) - math.atan2(here[1], here[0])
-        turn = math.atan2(math.sin(turn), math.cos(turn))
-        for start in (seed, seed + np.array([turn, 0, 0, 0, 0, turn]), seed + np.array([turn, 0, 0, 0, 0, -turn])):
-            q = self.arm.inverse(pose, start, tolerance=1e-8, iterations=300)
-            if q is not None:
-                return [float(v) for v in q]
-        raise CellError('the pose %s is out of the arm\'s reach' % np.round(pose[:3, 3], 3).tolist())
+        q = self.arm.nearest_inverse(pose, seed)
+        if q is None:
+            raise CellError('the pose %s is out of the arm\'s reach' % np.round(pose[:3, 3], 3).tolist())
+        return [float(v) for v in q]
 
     def tool_pose(self, positions):
         return self.arm.forward(positions)
