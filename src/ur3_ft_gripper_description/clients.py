@@ -35,6 +35,8 @@ TRAJECTORY_CONTROLLER = 'scaled_pos_joint_traj_controller'
 # ur_robot_driver's hardware interface node, as its bring-up names it.
 HARDWARE_INTERFACE = '/ur_hardware_interface/'
 STANDARD_GRAVITY = 9.80665
+# Stamps this far (s) from a node's ROS time come from another clock: simulated time against the wall clock.
+CLOCKS_APART = 3600.0
 
 
 class CellError(RuntimeError):
@@ -280,6 +282,11 @@ class FT300(object):
         """The mean wrench over the next `seconds` s."""
         start = self.rospy.get_time()
         end = start + seconds
+        with self._lock:
+            stamp = self.readings[-1][0] if self.readings else start
+        if abs(stamp - start) > CLOCKS_APART:
+            raise CellError('robotiq_ft_wrench is stamped %.0f s away from this node\'s ROS time: run this node '
+                            'with the same use_sim_time as the cell' % (stamp - start))
         wait_until(self.rospy, lambda: self.readings and self.readings[-1][0] >= end,
                    'robotiq_ft_wrench for %g s' % seconds, seconds + 10.0)
         readings = self.since(start, end)
