@@ -28,7 +28,7 @@ RSS_LIMIT_MB = 5.0
 WEIGHT_TOLERANCE = 0.02
 # The guarded touch's speed (m/s): at full speed the cell runs on while the touch reacts, so it presses
 # slowly enough that a late reaction stays far below the protective stop.
-TOUCH_SPEED = 0.002
+TOUCH_SPEED = 0.005
 NODES = ('/ur_hardware_interface', '/robotiq_ft_sensor', '/robotiq2FGripper')
 
 
@@ -76,7 +76,7 @@ def run(args, seconds, record_section):
                 picker.put_down()
                 shifts.append(math.hypot(*(np.subtract(block_pose(truth)[:2], before[:2]))))
                 toucher.start(*guarded_touch.START_XY)
-                toucher.touch(TOUCH_SPEED, 10.0)
+                toucher.touch(TOUCH_SPEED, 10.0, timeout=60.0)
                 toucher.back_off(TOUCH_SPEED)
                 weights.append(weighed)
                 if abs(weighed - mass) > WEIGHT_TOLERANCE * mass:
