@@ -390,7 +390,7 @@ def run(rospy):
         fingers = PhysicsFingers(client, spec)
     gripper = RegisterGripper(spec, rospy.logwarn, object_width=width, initial_position=initial, fingers=fingers)
     publisher = rospy.Publisher('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
-                                queue_size=10)
+                                queue_size=100)
 
     lock = threading.Lock()  # callbacks run in rospy's threads, the loop in this one
 

@@ -66,6 +66,7 @@ from .settings import PARAMETERS, read_settings
 from .trajectory import GoalError, JointTolerance, Point
 
 NODE = link.ARM_NODE
+STATE_QUEUE = 500
 ROBOT_MODES = {getattr(RobotMode, n): n for n in dir(RobotMode)
                if n.isupper() and isinstance(getattr(RobotMode, n), int)}
 
@@ -95,9 +96,11 @@ class ArmSim(object):
         self.joint_names = core.joint_names
 
         # -- publishers
-        self.joint_states = rospy.Publisher('joint_states', JointState, queue_size=10)
+        # A simulated second of states: faster than real time, a subscriber's turn comes in bursts, and
+        # rospy drops what overflows a connection's queue.
+        self.joint_states = rospy.Publisher('joint_states', JointState, queue_size=STATE_QUEUE)
         self.speed_scaling = rospy.Publisher('speed_scaling_factor', Float64, queue_size=10)
-        self.wrench = rospy.Publisher('wrench', WrenchStamped, queue_size=10)
+        self.wrench = rospy.Publisher('wrench', WrenchStamped, queue_size=STATE_QUEUE)
         self.io_states = rospy.Publisher('~io_states', IOStates, queue_size=10)
         self.tool_data = rospy.Publisher('~tool_data', ToolDataMsg, queue_size=10)
         self.program_running_pub = rospy.Publisher('~robot_program_running', Bool, queue_size=1, latch=True)
