@@ -1,9 +1,13 @@
-"""Every dependency key in package.xml resolves for ROS Noetic on Ubuntu 20.04 (focal).
+"""Every dependency key in package.xml resolves on each Ubuntu release users install on.
 
-A key resolves when it is a rosdep key with a focal (or a generic ubuntu)
-entry in rosdistro's base.yaml or python.yaml, a package that Noetic releases
-(noetic/distribution.yaml), or a package of a repository pinned in
-repos/robotiq-*.repos, which users build in their catkin workspace (doc/install.md).
+Noetic runs on Ubuntu 20.04 (focal), ROS-O (ROS_DISTRO=one) on 22.04 (jammy)
+and 24.04 (noble). A key resolves on a release when it is a rosdep key with an
+entry for that release (or a generic ubuntu one) in rosdistro's base.yaml or
+python.yaml, a package that Noetic releases (noetic/distribution.yaml; ROS-O
+builds the same repositories, and its own rosdep file is not among the upstream
+data), or a package of a repository pinned in repos/robotiq-*.repos, which users
+build in their catkin workspace (doc/install.md). package.xml's `condition`
+attributes are evaluated with that release's ROS_DISTRO, as rosdep does.
 The rosdistro files come from $UR3_FT_GRIPPER_ROSDISTRO (tools/quickstart sets it);
 nothing is downloaded.
 """
@@ -18,6 +22,8 @@ from catkin_pkg.package import parse_package
 from ur3_ft_gripper_testing.model import PACKAGE_DIR
 
 NOETIC = {'ROS_DISTRO': 'noetic', 'ROS_VERSION': '1', 'ROS_PYTHON_VERSION': '3'}
+ROS_O = {'ROS_DISTRO': 'one', 'ROS_VERSION': '1', 'ROS_PYTHON_VERSION': '3'}
+RELEASES = {'focal': NOETIC, 'jammy': ROS_O, 'noble': ROS_O}  # Ubuntu release: its ROS environment
 USER_REPOS_FILES = ('robotiq-noetic.repos', 'robotiq-kinetic.repos')
 
 
@@ -36,24 +42,25 @@ def load(name):
         return yaml.safe_load(f)
 
 
-def package_keys():
+def package_keys(environment):
+    """The keys rosdep reads from package.xml with ROS `environment` (its conditions evaluated)."""
     package = parse_package(os.path.join(PACKAGE_DIR, 'package.xml'))
-    package.evaluate_conditions(NOETIC)
+    package.evaluate_conditions(environment)
     deps = (package.buildtool_depends + package.build_depends + package.build_export_depends +
             package.buildtool_export_depends + package.exec_depends + package.test_depends +
             package.doc_depends)
     return sorted({d.name for d in deps if d.evaluated_condition})
 
 
-def on_focal(entry):
-    """Whether a rosdep rule has something to install on Ubuntu focal."""
+def on_release(entry, release):
+    """Whether a rosdep rule has something to install on Ubuntu `release`."""
     ubuntu = entry.get('ubuntu') if isinstance(entry, dict) else None
     if isinstance(ubuntu, list):
         return bool(ubuntu)  # one rule for every Ubuntu release
     if not isinstance(ubuntu, dict):
         return False
-    if 'focal' in ubuntu:
-        return bool(ubuntu['focal'])  # focal: null means "not available"
+    if release in ubuntu:
+        return bool(ubuntu[release])  # release: null means "not available"
     if '*' in ubuntu:
         return bool(ubuntu['*'])
     return bool(set(ubuntu) & {'apt', 'pip', 'source'})  # an installer rule for every release
@@ -85,29 +92,42 @@ def from_user_repository(key):
     return bool(set(path.split(os.sep)) & user_repositories())
 
 
-def resolves(key):
+def resolves(key, release):
     rules = dict(load('base.yaml'), **load('python.yaml'))
     if key in rules:
-        return on_focal(rules[key])
+        return on_release(rules[key], release)
     return key in noetic_packages() or from_user_repository(key)
 
 
-@pytest.mark.parametrize('key', package_keys())
-def test_key_resolves_for_noetic_on_focal(key):
-    assert resolves(key), ("'%s' is no rosdep key with a focal rule, no Noetic package and no package of "
-                           "the repositories in repos/%s" % (key, ' or repos/'.join(USER_REPOS_FILES)))
+@pytest.mark.parametrize('release, key', [(release, key) for release, environment in RELEASES.items()
+                                          for key in package_keys(environment)])
+def test_key_resolves_on_each_release(release, key):
+    assert resolves(key, release), (
+        "'%s' is no rosdep key with a %s rule, no Noetic package and no package of the repositories in "
+        "repos/%s: give it a `condition` in package.xml or a documented alternative (doc/install.md)"
+        % (key, release, ' or repos/'.join(USER_REPOS_FILES)))
 
 
-@pytest.mark.parametrize('key, expected', [
-    ('python3-rospkg', True),    # python.yaml: ubuntu: [python3-rospkg]
-    ('rospkg', False),           # a Python module, not a rosdep key
-    ('xacro', True),             # released in Noetic
-    ('robotiq_ft_sensor', True),  # not released: built from repos/robotiq-*.repos
-    ('python3-pymodbus', True),  # ubuntu: {'*': ...}
-    ('python3-absl', True),      # a focal rule among other releases' rules
-    ('python3-beartype', False),  # focal: null
-    ('python-crypto', False),    # rules for older Ubuntu releases only
-    ('no_such_package', False),
+@pytest.mark.parametrize('key, release, expected', [
+    ('python3-rospkg', 'noble', True),    # python.yaml: ubuntu: [python3-rospkg]
+    ('rospkg', 'focal', False),           # a Python module, not a rosdep key
+    ('xacro', 'jammy', True),             # released in Noetic, rebuilt by ROS-O
+    ('robotiq_ft_sensor', 'noble', True),  # not released: built from repos/robotiq-*.repos
+    ('python3-pymodbus', 'jammy', True),  # ubuntu: {'*': ...}
+    ('python3-transforms3d', 'focal', True),  # focal: pip, the others: '*'
+    ('python3-absl', 'focal', True),      # a focal rule among other releases' rules
+    ('python3-beartype', 'focal', False),  # focal: null
+    ('sdformat', 'jammy', True),          # rules for focal and jammy ...
+    ('sdformat', 'noble', False),         # ... and none for noble
+    ('python-crypto', 'focal', False),    # rules for older Ubuntu releases only
+    ('no_such_package', 'noble', False),
 ])
-def test_the_check_itself(key, expected):
-    assert resolves(key) is expected
+def test_the_check_itself(key, release, expected):
+    assert resolves(key, release) is expected
+
+
+def test_sdformat_is_asked_for_only_where_noetic_runs():
+    # base.yaml's sdformat has no noble rule; package.xml's condition keeps
+    # rosdep on ROS-O from asking for it.
+    assert 'sdformat' in package_keys(NOETIC)
+    assert 'sdformat' not in package_keys(ROS_O)
