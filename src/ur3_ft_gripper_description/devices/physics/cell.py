@@ -131,12 +131,13 @@ class Cell(object):
                              'model: a model that export_mjcf did not write?' % ', '.join(self.arm_joints))
         self._arm_position_servo = self._ctrl[self._arm_position_ctrl]
         self._arm_velocity_servo = self._ctrl[self._arm_velocity_ctrl]
-        # The inertia feedforward's acceleration and torque of every dof, made once, and their arm parts;
-        # 1 / kp as a diagonal matrix, which turns a torque into the position servo's offset.
+        # The inertia feedforward's change of velocity and torque of every dof, made once, and their arm
+        # parts; per number of timesteps a call, the diagonal matrix that turns the torque into the
+        # position servo's offset.
         self._feedforward, self._feedforward_torque = np.zeros(m.nv), np.zeros(m.nv)
         self._arm_feedforward = self._feedforward[self._arm_dofs]
         self._arm_feedforward_torque = self._feedforward_torque[self._arm_dofs]
-        self._inverse_kp = np.diag(1.0 / self._arm_kp)
+        self._offsets_per_torque = {}
         # How far the servos' reference goes over a step() call, and where it starts (feedforward included).
         self._reference_change, self._reference_origin = np.zeros(len(self.arm_joints)), np.zeros(len(self.arm_joints))
         self.arm_lower = np.array([m.jnt_range[j][0] for j in joint_ids])
@@ -178,7 +179,6 @@ class Cell(object):
                                  (self.gripper.angles[1:] - self.gripper.angles[:-1])).tolist()
             self._finger_segment = (0.0, 0.0, 0.0, 0.0, 0.0)  # none yet: the first timestep finds its own
             self._increasing_openings = -self.gripper.openings  # GripperKinematics.angle's table, made once
-            self._unit_range = np.array([-1.0, 1.0])  # times the torque cap: the drive's force range
             self._finger_still = False  # whether the drive's velocity input is 0 since the ramp's end
             joint = m.joint(self.finger_joint).id
             self._finger_joint = joint
@@ -278,9 +278,10 @@ class Cell(object):
     def step(self, dt):
         """Let `dt` seconds pass in whole timesteps (the remainder is carried over); returns how many."""
         # This loop is the cell's whole cost beside MuJoCo's (bench/physics.py measures the two side by
-        # side): at every timestep only what changes from one to the next, and MuJoCo's own vector
-        # functions (mju_*) rather than numpy's, which cost several times more between two MuJoCo steps
-        # (neither's code nor data is still in the processor's caches there).
+        # side): at every timestep only what changes from one to the next, in as few calls as may be.
+        # Between two MuJoCo steps, which leave little of Python's code and data in the processor's
+        # caches, a numpy call on a few values costs 1-1.5 us; MuJoCo's vector functions (mju_*) cost
+        # less for a copy or a sum (0.8-0.9 us), a numpy item 0.15 us.
         timestep = self.timestep
         self._debt += max(float(dt), 0.0)
         steps = int(self._debt / timestep + 1e-9)
@@ -306,18 +307,14 @@ class Cell(object):
                 # takes (mass matrix, armature included, times the reference's acceleration), given as an
                 # offset of the position servo's reference. Once a call, at the state it starts from: a
                 # robot's controller computes it once a control cycle.
-                acceleration = self._arm_feedforward
-                mujoco.mju_sub(acceleration, velocity, self._previous_velocity)
-                mujoco.mju_scl(acceleration, acceleration, 1.0 / (steps * timestep))
+                # M (v - v_previous), then divided by kp and by the call's duration in one product.
+                mujoco.mju_sub(self._arm_feedforward, velocity, self._previous_velocity)
                 mujoco.mj_mulM(model, data, self._feedforward_torque, self._feedforward)
-                origin = self._reference_origin
-                mujoco.mju_mulMatVec(origin, self._inverse_kp, self._arm_feedforward_torque)
+                origin = servo if change is None else self._reference_origin  # constant: the servo's own
+                mujoco.mju_mulMatVec(origin, self._offset_per_torque(steps), self._arm_feedforward_torque)
                 mujoco.mju_addTo(origin, start)
                 mujoco.mju_copy(self._arm_velocity_servo, velocity)  # else it holds this velocity already
-            if change is not None:
-                self._servo_holds = None
-            elif origin is not start:
-                mujoco.mju_copy(servo, origin)
+            if origin is not start or change is not None:
                 self._servo_holds = None
             elif self._servo_holds != start_list:
                 mujoco.mju_copy(servo, start)
@@ -330,7 +327,7 @@ class Cell(object):
             ramping = finger['ramp'] != finger['target'] or finger['angle'] is None
             still, stalled, force = self._finger_still, finger['stalled'], finger['force']
             qpos, qvel, finger_qpos, finger_dof = self._qpos, self._qvel, self._finger_qpos, self._finger_dof
-            cap, unit = self._finger_torque_range, self._unit_range
+            cap = self._finger_torque_range
             # The rates' table segment the fingers are in: gripping, they stay in it for many timesteps.
             low, high, base, slope, rate = self._finger_segment
         compute_contact_forces = self._compute_contact_forces
@@ -348,7 +345,9 @@ class Cell(object):
                 angle = qpos.item(finger_qpos)
                 if not low <= angle < high:
                     low, high, base, slope, rate = self._rate_segment(angle)
-                mujoco.mju_scl(cap, unit, force * (slope * (angle - base) + rate))
+                finger_torque = force * (slope * (angle - base) + rate)
+                cap[0] = -finger_torque  # two numpy items: cheaper than any call on the pair
+                cap[1] = finger_torque
             mujoco.mj_step(model, data)
             count += 1
             if compute_contact_forces:
@@ -376,6 +375,13 @@ class Cell(object):
             self._reference, self._previous_velocity = self._next_reference, velocity
             self._previous_velocity_list = velocity_list
         return steps
+
+    def _offset_per_torque(self, steps):
+        """diag(1 / (kp T)), T the duration of `steps` timesteps: M (v - v_previous) times it is the offset."""
+        matrix = self._offsets_per_torque.get(steps)
+        if matrix is None:
+            matrix = self._offsets_per_torque[steps] = np.diag(1.0 / (self._arm_kp * (steps * self.timestep)))
+        return matrix
 
     # -- the arm ------------------------------------------------------------------
 
