@@ -27,7 +27,6 @@ import rospkg
 import rospy
 import rostest
 
-from ur3_ft_gripper_description.devices.physics import link
 from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_testing import rostest_helpers, shipped
 from ur3_ft_gripper_testing.grasp import gpo_tolerance
@@ -64,14 +63,7 @@ class PhysicsCellTest(unittest.TestCase):
         rospy.init_node('physics_cell_check')
         cls.world = load_world(WORLD)
         cls.cell = pick_and_weigh.PickAndWeigh(rospy, say=say)
-        cls.truth_link = rostest_helpers.wait_for(cls._connect, 'the physics cell', 60)
-
-    @staticmethod
-    def _connect():
-        try:
-            return link.CellClient(link.node_cell_address(rospy)[0])
-        except link.LinkError:
-            return None
+        cls.truth_link = rostest_helpers.cell_link()
 
     def truth(self):
         return self.truth_link.truth()[1]

@@ -26,7 +26,6 @@ import rostest
 
 import numpy as np
 
-from ur3_ft_gripper_description.devices.physics import link
 from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_testing import rostest_helpers, shipped
 from ur3_ft_gripper_testing.cpu_load import CpuLoad
@@ -59,14 +58,7 @@ class PhysicsUnderLoadTest(unittest.TestCase):
         cls.world = load_world(WORLD)
         cls.cell = pick_and_weigh.PickAndWeigh(rospy, say=say)
         cls.touch = guarded_touch.GuardedTouch(rospy, say=say)
-        cls.truth_link = rostest_helpers.wait_for(cls._connect, 'the physics cell', 60)
-
-    @staticmethod
-    def _connect():
-        try:
-            return link.CellClient(link.node_cell_address(rospy)[0])
-        except link.LinkError:
-            return None
+        cls.truth_link = rostest_helpers.cell_link()
 
     def measure(self):
         """(weighed mass kg, gPO on the block, the guarded touch's steady force N, MuJoCo's contact force N)."""

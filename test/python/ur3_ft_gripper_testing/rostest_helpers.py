@@ -100,6 +100,19 @@ def wait_for(condition, what, timeout=TIMEOUT, step=0.05):
         time.sleep(step)
 
 
+def cell_link(timeout=60.0):
+    """A link.CellClient of the physics cell beside this node (ur_hardware_interface in its namespace), once
+    it serves: MuJoCo's own figures (`truth()`) to judge the interfaces by."""
+    from ur3_ft_gripper_description.devices.physics import link
+
+    def connect():
+        try:
+            return link.CellClient(link.node_cell_address(rospy)[0])
+        except link.LinkError:
+            return None
+    return wait_for(connect, 'the physics cell', timeout)
+
+
 def wait_for_result(client, timeout=TIMEOUT):
     """The terminal status of the goal that actionlib SimpleActionClient `client` sent last, once its
     result has arrived (client.get_result() then has it).
