@@ -84,14 +84,16 @@ def test_the_ft300_frame_carries_the_force_and_torque_sensors(tmp_path):
     root = ElementTree.parse(str(out)).getroot()
     frame = root.find(".//body[@name='left_robotiq_ft_frame_id']")
     assert frame.find("site[@name='left_robotiq_ft_frame_id']") is not None
-    assert root.find("sensor/force").get('site') == 'left_robotiq_ft_frame_id'
-    assert root.find("sensor/torque").get('site') == 'left_robotiq_ft_frame_id'
+    assert [s.get('site') for s in root.findall("sensor/force")] == ['left_tool0', 'left_robotiq_ft_frame_id']
+    assert [s.get('site') for s in root.findall("sensor/torque")] == ['left_tool0', 'left_robotiq_ft_frame_id']
+    assert root.find(".//body[@name='left_tool0']/site[@name='left_tool0']") is not None
     pads = [g for g in root.iter('geom') if 'inner_finger_pad' in g.get('name')]
     assert len(pads) == 2 and all(g.get('priority') == '1' and g.get('condim') for g in pads)
 
 
-def test_without_the_ft300_there_is_no_sensor(tmp_path):
+def test_without_the_ft300_only_the_flange_has_a_sensor(tmp_path):
     out = tmp_path / 'noft.xml'
     assert export_mjcf('--no-ft-sensor', '-o', str(out)).returncode == 0
     root = ElementTree.parse(str(out)).getroot()
-    assert root.find('sensor') is None and not list(root.iter('site'))
+    assert [s.get('site') for s in root.find('sensor')] == ['tool0', 'tool0']
+    assert [s.get('name') for s in root.iter('site')] == ['tool0']

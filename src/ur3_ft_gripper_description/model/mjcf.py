@@ -37,6 +37,10 @@ What physics needs beyond the URDF (the figures and their sources are in
   (``<frame>_force``, ``<frame>_torque``); MuJoCo reports there what the
   frame's parent exerts on it, i.e. minus what the tool side exerts on the
   sensor;
+* the flange (``tool0``): the same pair of sensors, the wrench between the
+  arm and everything mounted on it. An e-Series measures it there with its
+  built-in sensor; a CB3 estimates it from its joint currents. The simulated
+  robot's own ``wrench`` and ``get_tcp_force()`` start from it;
 * the finger pads' friction and contact stiffness, and linkage equalities
   stiff enough that the closed four-bar does not drift.
 """
@@ -52,7 +56,7 @@ from transforms3d.quaternions import mat2quat
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description, export
-from ur3_ft_gripper_description.model.names import FINGER_JOINT, PADS
+from ur3_ft_gripper_description.model.names import FINGER_JOINT, FLANGE, PADS
 
 EXCLUDED_REASONS = ('Adjacent', 'Default', 'Always')
 VELOCITY_SUFFIX = '_velocity'
@@ -125,6 +129,7 @@ class MjcfWriter(object):
         self.arm_joints = _servo_joints(model, self.finger)
         self.pads = {prefix + pad for pad in PADS}
         self.ft_frame = prefix + ft_sensor_frame()
+        self.flange = prefix + FLANGE
 
     def element(self, parent, tag, **attributes):
         node = self.doc.createElement(tag)
@@ -190,7 +195,7 @@ class MjcfWriter(object):
                 attributes.update(self.pad_attributes())
             geom = self.element(body, 'geom', **attributes)
             _pose_attributes(geom, collision.origin)
-        if link_name == self.ft_frame:
+        if link_name in (self.ft_frame, self.flange):
             self.element(body, 'site', name=link_name)
         for child in self.model.robot.joints:
             if child.parent == link_name:
@@ -244,11 +249,13 @@ class MjcfWriter(object):
                          kv=repr(float(gripper['finger_kv'])))
 
     def sensors(self, root):
-        """The FT 300's force and torque sensors at its sensor frame."""
-        if self.ft_frame in self.model.robot.link_map:
+        """Force and torque sensors at the flange and at the FT 300's sensor frame."""
+        frames = [frame for frame in (self.flange, self.ft_frame) if frame in self.model.robot.link_map]
+        if frames:
             sensor = self.element(root, 'sensor')
-            self.element(sensor, 'force', name=self.ft_frame + FORCE_SUFFIX, site=self.ft_frame)
-            self.element(sensor, 'torque', name=self.ft_frame + TORQUE_SUFFIX, site=self.ft_frame)
+        for frame in frames:
+            self.element(sensor, 'force', name=frame + FORCE_SUFFIX, site=frame)
+            self.element(sensor, 'torque', name=frame + TORQUE_SUFFIX, site=frame)
 
 
 def export_mjcf(mappings, output, matrix_path=None):

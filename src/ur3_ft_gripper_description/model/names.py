@@ -4,6 +4,8 @@ The bottom of the package's imports: it imports nothing of the package, so
 anything may take a frame name from here without loading the xacro engine.
 """
 
+# ur_description's flange frame (before the prefix): where an e-Series measures the tool's wrench.
+FLANGE = 'tool0'
 # Names both upstream 2F-140 macros give (before the prefix).
 GRIPPER_BASE = 'robotiq_arg2f_base_link'
 FINGER_JOINT = 'finger_joint'

@@ -18,6 +18,9 @@
   multiple of `period`, for ``take_wrench_samples()``: the FT 300's node
   publishes one reading per period of simulated time, stamped with it,
   however late its own process runs;
+* the flange: ``flange_wrench()``, the same at ``tool0``: what everything
+  mounted on the arm exerts on it, the reading the simulated robot's own
+  wrench starts from;
 * the 2F-140: ``command_finger(opening, speed, force)`` moves a target along
   the pad gap at `speed`, which finger_joint's servo follows with its torque
   capped at what squeezes with `force` (by virtual work, the torque is the
@@ -41,7 +44,7 @@ import numpy as np
 
 from ... import kinematics
 from ...model import description, mjcf
-from ...model.names import FINGER_JOINT
+from ...model.names import FINGER_JOINT, FLANGE
 from ..gripper_model import GripperKinematics
 from . import require_mujoco
 from .world import WorldError, empty_world, overlap_problem
@@ -54,6 +57,12 @@ STALL_SPEED = 0.02
 STALL_TIME = 0.02
 
 MOVING, AT_TARGET, ON_OBJECT = 'moving', 'at_target', 'on_object'
+
+
+def _sensor_slice(m, name):
+    """The slice of MjData.sensordata that sensor `name` fills."""
+    start = m.sensor_adr[m.sensor(name).id]
+    return slice(start, start + m.sensor_dim[m.sensor(name).id])
 
 
 def _index(ids):
@@ -161,6 +170,9 @@ class Cell(object):
                                 m.sensor_adr[m.sensor(frame + mjcf.FORCE_SUFFIX).id] + 3)
             self._torque = slice(m.sensor_adr[m.sensor(frame + mjcf.TORQUE_SUFFIX).id],
                                  m.sensor_adr[m.sensor(frame + mjcf.TORQUE_SUFFIX).id] + 3)
+        flange = prefix + FLANGE
+        self._flange_force = _sensor_slice(m, flange + mjcf.FORCE_SUFFIX)
+        self._flange_torque = _sensor_slice(m, flange + mjcf.TORQUE_SUFFIX)
         self.wrench_sample_period = None
         self._wrench_samples, self._wrench_dropped = collections.deque(), 0
         self._sample_every = self._next_sample = None
@@ -446,6 +458,11 @@ class Cell(object):
             raise ValueError('the model has no FT 300')
         sensordata = self.data.sensordata
         return -np.concatenate((sensordata[self._force], sensordata[self._torque]))
+
+    def flange_wrench(self):
+        """(fx, fy, fz, tx, ty, tz) that the tool side exerts on the flange (tool0), in tool0's axes."""
+        sensordata = self.data.sensordata
+        return -np.concatenate((sensordata[self._flange_force], sensordata[self._flange_torque]))
 
     def keep_wrench_samples(self, period, keep=2000):
         """From now on, record wrench() at every simulated time that is a whole multiple of `period` (s).
