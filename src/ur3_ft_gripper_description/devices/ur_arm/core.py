@@ -36,6 +36,7 @@ from . import cartesian
 from . import controller_manager as cm
 from . import joints as jm
 from . import robot_state as rs
+from . import tcp_wrench
 from . import urscript
 from .trajectory import GoalError
 from .trajectory_controller import TrajectoryController
@@ -185,6 +186,8 @@ class ArmCore(object):
         self.script_step = None      # [urscript.JointMove or urscript.Wait, elapsed s] in progress
         self.script_running = False  # a primary program from script_command
         self.held = np.array(motion.position, dtype=float)  # where the arm holds while nothing commands
+        self.tcp = np.eye(4)         # the TCP in the flange's frame (set_tcp)
+        self.wrench_model = tcp_wrench.TcpWrench(self.robot.payload)
         # The controller_stopper acts on the first cycle too: a robot that starts without
         # its program running starts with the commanding controllers stopped.
         self.last_program_running = True
@@ -208,6 +211,20 @@ class ArmCore(object):
     def _say(self, level, text):
         self.messages.append((level, text))
 
+    def _flange(self):
+        return self.arm.forward(np.array(self.motion.position, dtype=float))
+
+    def _tcp_wrench_model(self):
+        self.wrench_model.payload = self.robot.payload
+        return self.wrench_model
+
+    def tcp_force(self):
+        """(base axes, TCP axes): the robot's own external wrench at its TCP (tcp_wrench.py)."""
+        flange = self.motion.flange_wrench
+        if flange is None:
+            return np.zeros(6), np.zeros(6)
+        return self._tcp_wrench_model().at_tcp(flange, self._flange()[:3, :3], self.tcp)
+
     def _state(self):
         return np.array(self.motion.position, dtype=float), np.array(self.motion.velocity, dtype=float)
 
@@ -223,7 +240,7 @@ class ArmCore(object):
         if refusal is not None:
             self._say(ERROR, refusal)
             return False, refusal
-        # The robot's own TCP sensor reads no load in the simulation: zeroing it leaves it at zero.
+        self._tcp_wrench_model().zero(self.motion.flange_wrench, self._flange()[:3, :3])
         return True, ''
 
     def dashboard(self, command):
@@ -604,12 +621,12 @@ class ArmCore(object):
         snapshot = Snapshot()
         snapshot.position, snapshot.velocity = self._state()
         snapshot.effort = np.array(self.motion.effort, dtype=float)
-        snapshot.tool_pose = self.arm.forward(snapshot.position)
+        snapshot.tool_pose = self.arm.forward(snapshot.position).dot(self.tcp)
         snapshot.speed_scaling = robot.speed_scaling() * limit_factor
         snapshot.reading = {name for name in READ_ONLY if name in self.manager.controllers and
                             self.manager.controllers[name].running}
-        # The robot's own TCP sensor reads no load in the simulation.
-        snapshot.wrench = (0.0,) * 6
+        # The robot's own wrench, in tool0_controller (the TCP) as ur_robot_driver publishes it.
+        snapshot.wrench = tuple(self.tcp_force()[1])
         snapshot.digital_in, snapshot.digital_out = list(robot.digital_in), list(robot.digital_out)
         snapshot.analog_in, snapshot.analog_out = list(robot.analog_in), list(robot.analog_out)
         snapshot.tool_voltage = robot.tool_voltage

@@ -8,6 +8,9 @@ implementation offers:
 - `position`, `velocity`, `effort`: the joints' state, six floats each
   (numpy arrays, controller order: shoulder_pan ... wrist_3; rad, rad/s, Nm);
 - `step(command, dt)`: move the joints for `dt` seconds under `command`;
+- `flange_wrench`: what the tool exerts on the flange (six floats: N, N m in
+  tool0's axes, about its origin), or None where nothing is measured; the
+  robot's own TCP wrench starts from it (tcp_wrench.py);
 - `protective_stop`: None, or a one-line reason when the last step() made the
   robot stop as a real UR does (a collision, a joint or force limit). Each
   step() sets it anew; the core latches the stop itself (safety mode
@@ -28,7 +31,7 @@ Command modes, what a real UR does for each:
 KinematicJoints, the first implementation, is kinematic: the joints go where
 they are commanded, no faster than the model's velocity limits and never
 beyond its position limits; no dynamics, no collisions, so it never reports
-a protective stop.
+a protective stop; nothing touches the tool, so it measures no flange wrench.
 """
 
 import math
@@ -78,6 +81,7 @@ class KinematicJoints(object):
         self.velocity_limits = np.asarray(velocity_limits, dtype=float)
         self.servo_lag = float(servo_lag)
         self.protective_stop = None
+        self.flange_wrench = None
 
     @classmethod
     def from_settings(cls, settings):

@@ -62,6 +62,10 @@ class PhysicsJointMotion(object):
     def effort(self):
         return self.cell.arm_effort
 
+    @property
+    def flange_wrench(self):
+        return self.cell.flange_wrench()
+
     def step(self, command, dt):
         """Follow `command` for `dt` seconds; protective_stop says whether the robot stopped meanwhile."""
         mode = command.mode

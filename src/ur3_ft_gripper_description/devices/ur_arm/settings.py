@@ -17,7 +17,9 @@ from ..physics import arm_cell
 from . import controller_manager as cm
 from . import robot_state as rs
 from . import software
+from ...model.names import FLANGE
 from .arm_kinematics import ArmKinematics
+from .tcp_wrench import mounted_payload
 
 
 def ur_model_name(name, value):
@@ -121,4 +123,6 @@ def read_settings(get_param):
     mode = param('~robot_mode')
     settings.robot = rs.RobotState(settings.software, robot_mode=mode, program_running=param('~program_running'),
                                    headless=param('~headless_mode'))
+    # The installation's payload: what the model mounts on the flange, as a user enters it on the teach pendant.
+    settings.robot.payload = mounted_payload(description, settings.prefix + FLANGE)
     return settings

@@ -71,8 +71,10 @@ class TcpWrench(object):
         return np.asarray(flange_wrench, dtype=float) - payload - self.offset
 
     def zero(self, flange_wrench, flange_rotation):
-        """zero_ftsensor: from now on, the present reading is zero."""
+        """zero_ftsensor: from now on, the present reading is zero (nothing to zero where nothing is measured)."""
         self.offset = np.zeros(6)
+        if flange_wrench is None:
+            return
         self.offset = self._external_at_flange(flange_wrench, flange_rotation)
 
     def at_tcp(self, flange_wrench, flange_rotation, tcp):
