@@ -382,12 +382,25 @@ def test_movej_to_a_pose_and_sleep(arm):
 
 
 def test_scripts_the_robot_would_not_compile_change_nothing(arm):
-    for script in ('movel(p[0, 0, 0, 0, 0, 0])', 'movej([0, 0, 0])', 'sec s():\n  movej(%r)\nend' % START,
-                   'set_tool_digital_out(1)', 'sleep(-1)'):
+    for script, line in (('movej([0, 0, 0]', 1), ('def p():\n  sleep(1)\n', 2),
+                         ('sec s():\n  movej(%r)\nend' % START, 2), ('def p():\n  x = 1\n  frobnicate(x)\nend', 3)):
         arm.script_command(script)
         level, text = arm.take_messages()[-1]
         assert level == arm_core.ERROR and 'would not compile' in text and '\n' not in text
+        assert 'line %d' % line in text, text
         assert arm.robot.program_running and not arm.script_running
+
+
+def test_a_runtime_error_stops_the_program_with_the_robots_runtime_exception(arm):
+    for script in ('def p():\n  movej([0, 0, 0])\nend', 'def p():\n  set_tool_digital_out(1)\nend',
+                   'def p():\n  a = [1, 2]\n  b = a[2]\nend'):
+        arm.script_command(script)
+        run(arm, 2 * DT)
+        level, text = arm.take_messages()[-1]
+        assert level == arm_core.ERROR and 'program stopped' in text and '\n' not in text, text
+        assert arm.robot.log[-1] in text
+        assert not arm.script_running and arm.robot.program_state == rs.STOPPED
+        assert np.array_equal(arm.motion.position, START)
 
 
 def test_the_robot_log_keeps_only_its_latest_entries(arm):

@@ -462,39 +462,6 @@ def test_rotation_vector_is_the_inverse_of_rotation_matrix_up_to_half_a_turn():
     assert np.allclose(np.abs(rotation_vector(half)), [0.0, 0.0, math.pi], atol=1e-9)
 
 
-# -- URScript ---------------------------------------------------------------------------
-
-def test_script_parsing():
-    from ur3_ft_gripper_description.devices.ur_arm import urscript
-    secondary, statements = urscript.parse('movej([0, -1.57, 1.57, -1.57, -1.57, 0], a=1.2, v=0.5)')
-    assert not secondary and statements[0].name == 'movej'
-    target, a, v, t = urscript.movej_arguments(statements[0])
-    assert (a, v, t) == (1.2, 0.5, 0.0) and len(target) == 6
-    secondary, statements = urscript.parse('sec io():\n  set_standard_digital_out(2, True)\nend')
-    assert secondary and statements[0].args == [2, True]
-    _, statements = urscript.parse('def prog():\n movej(p[0.3, 0.1, 0.4, 0, 3.14, 0])\nend')
-    assert isinstance(urscript.movej_arguments(statements[0])[0], urscript.Pose)
-    for bad in ('movel(p[0, 0, 0, 0, 0, 0])', 'sec s():\n movej([0, 0, 0, 0, 0, 0])\nend', 'def p():\n sleep(1)',
-                'movej([0, 0, 0])'):
-        with pytest.raises(urscript.ScriptError):
-            _, statements = urscript.parse(bad)
-            urscript.movej_arguments(statements[0])
-
-
-def test_movej_profile_is_synchronous_and_within_limits():
-    from ur3_ft_gripper_description.devices.ur_arm import urscript
-    move = urscript.JointMove([0.0] * 6, [1.0, 0.5, 0, 0, 0, -1.0], 1.4, 1.05, 0.0, [math.pi] * 6)
-    # Trapezoid: 1 rad at 1.05 rad/s with 1.4 rad/s^2 ramps.
-    assert move.total_time == pytest.approx(1.0 / 1.05 + 1.05 / 1.4)
-    half = move.position(move.total_time / 2)
-    assert half[1] == pytest.approx(half[0] / 2) and half[5] == pytest.approx(-half[0])
-    assert np.allclose(move.position(move.total_time), [1.0, 0.5, 0, 0, 0, -1.0])
-    slow = urscript.JointMove([0.0] * 6, [1.0] + [0] * 5, 1.4, 1.05, 5.0, [math.pi] * 6)
-    assert slow.total_time == pytest.approx(5.0)
-    capped = urscript.JointMove([0.0] * 6, [3.0] + [0] * 5, 100.0, 10.0, 0.0, [1.0] * 6)
-    assert capped.total_time > 3.0
-
-
 def test_stopping_the_controller_preempts_its_goal():
     controller = jtc()
     controller.accept(7, JOINTS, [Point(2.0, [0.4] * 6)], 0.0, [0] * 6, [0] * 6)

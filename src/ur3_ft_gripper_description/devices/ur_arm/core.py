@@ -14,7 +14,9 @@ controllers.md, features.md):
 - the robot: modes, program, speed slider, IO, payload, safety
   (robot_state.RobotState), its dashboard server, and robot_state_helper's
   set_mode (SetModeRun);
-- URScript on script_command (movej, IO, textmsg, popup, sleep);
+- URScript on script_command: the urscript package's interpreter runs the
+  program, script_robot.py is what its calls do to the robot (motion,
+  force mode, state, set-up, IO);
 - the trajectory controllers (scaled or not, pass-through) and the
   Cartesian ones: goals accepted, refused, preempted, cancelled, ended;
   joint_group_vel_controller and twist_controller.
@@ -36,8 +38,9 @@ from . import cartesian
 from . import controller_manager as cm
 from . import joints as jm
 from . import robot_state as rs
+from ... import urscript
+from . import script_robot
 from . import tcp_wrench
-from . import urscript
 from .trajectory import GoalError
 from .trajectory_controller import TrajectoryController
 
@@ -182,9 +185,9 @@ class ArmCore(object):
         self.group_velocity = np.zeros(6)
         self.twist = np.zeros(6)
         self.twist_follower = cartesian.TwistFollower(self.arm)
-        self.script_queue = []
-        self.script_step = None      # [urscript.JointMove or urscript.Wait, elapsed s] in progress
-        self.script_running = False  # a primary program from script_command
+        self.script_robot = script_robot.ScriptRobot(self)
+        self.script_run = None       # urscript.Run of the primary program from script_command
+        self.secondary_runs = []     # urscript.Run of the secondary programs running beside it
         self.held = np.array(motion.position, dtype=float)  # where the arm holds while nothing commands
         self.tcp = np.eye(4)         # the TCP in the flange's frame (set_tcp)
         self.wrench_model = tcp_wrench.TcpWrench(self.robot.payload)
@@ -485,82 +488,89 @@ class ArmCore(object):
 
     # -- URScript ---------------------------------------------------------------------------------
 
+    @property
+    def script_running(self):
+        """A primary program from script_command runs (it replaced External Control)."""
+        return self.script_run is not None
+
+    def robot_log(self, text):
+        """A line of the robot's log (textmsg, popup), which the node also writes to rosout."""
+        self.robot.add_log(text)
+        self._say(INFO, 'robot log: %s' % text)
+
     def script_command(self, text):
         """A program on script_command: a primary one replaces the running program, a secondary runs beside."""
         try:
-            secondary, statements = urscript.parse(text)
-        except urscript.ScriptError as exc:
+            program = urscript.compile_script(text, self.script_robot.served())
+        except urscript.CompileError as exc:
             self._say(ERROR, 'script_command: the robot would not compile this script: %s' % exc)
             return
         if self.robot.robot_mode != rs.RUNNING:
             self._say(ERROR, 'script_command: the robot is %s; it runs programs only when RUNNING'
                       % self.robot.robot_mode)
             return
-        self.robot.script_started(secondary)
-        if secondary:
-            for statement in statements:
-                self._run_statement(statement)
+        self.robot.script_started(program.secondary)
+        if program.secondary:
+            run = urscript.Run(program, self.script_robot)
+            self.secondary_runs.append(run)
+            self._step_run(run, 0.0)
             return
-        self.script_queue = list(statements)
-        self.script_step = None
-        self.script_running = True
+        if self.script_run is not None:
+            self.script_run.stop()
+        self.script_robot.start()
+        self.script_run = urscript.Run(program, self.script_robot)
 
-    def _run_statement(self, statement):
-        """Run one statement; a movej or sleep becomes the program's current step."""
-        name, args = statement.name, statement.args
-        if name == 'movej':
-            self._start_movej(statement)
-        elif name == 'sleep':
-            self.script_step = [urscript.Wait(urscript.sleep_seconds(statement)), 0.0]
-        elif name in ('set_standard_digital_out', 'set_digital_out', 'set_configurable_digital_out',
-                      'set_tool_digital_out'):
-            # io_states numbers the outputs 0-7 standard, 8-15 configurable, 16-17 tool.
-            offset = {'set_configurable_digital_out': 8, 'set_tool_digital_out': 16}.get(name, 0)
-            self._checked(name, self.robot.set_io(1, args[0] + offset, 1.0 if args[1] else 0.0))
-        elif name in ('set_standard_analog_out', 'set_analog_out'):
-            self._checked(name, self.robot.set_io(3, args[0], float(args[1])))
-        elif name == 'set_tool_voltage':
-            self._checked(name, self.robot.set_io(4, 0, float(args[0])))
-        elif name in ('textmsg', 'popup'):
-            text = ' '.join(str(a) for a in args)
-            self.robot.add_log(text)
-            self._say(INFO, 'robot log: %s' % text)
+    def _step_run(self, run, dt):
+        """One cycle of a program; a runtime error is the robot's runtime exception, in its log."""
+        run.step(dt)
+        if run.error is not None:
+            self._runtime_exception(run.error)
 
-    def _start_movej(self, statement):
-        target, a, v, t = urscript.movej_arguments(statement)
-        start = self._state()[0]
-        if isinstance(target, urscript.Pose):
-            target = self.arm.inverse(cartesian.pose_from_ur_pose(target), start)
-            if target is None:
-                return self._stop_script('movej: the pose is out of reach')
-        target = np.asarray(target, dtype=float)
-        if np.any(target < self.arm.lower) or np.any(target > self.arm.upper):
-            return self._stop_script('movej: target beyond the joint limits')
-        self.script_step = [urscript.JointMove(start, target, a, v, t, self.arm.velocity), 0.0]
+    def _runtime_exception(self, fault):
+        # ur_client_library prints the robot's runtime exception over three lines: one here.
+        text = ' '.join(line.strip() for line in str(fault).splitlines())
+        self.robot.add_log(text)
+        self._say(ERROR, 'script_command: %s; program stopped' % text)
 
     def _stop_script(self, reason):
         self._say(ERROR, 'script_command: %s; program stopped' % reason)
-        self.script_queue = []
-        self.script_step = None
-        self.script_running = False
+        self._end_script()
+
+    def _end_script(self):
+        if self.script_run is not None:
+            self.script_run.stop()
+        self.script_run = None
+        self.script_robot.finish()
         self.robot.script_finished()
+
+    def _secondary_programs(self, dt):
+        for run in list(self.secondary_runs):
+            self._step_run(run, dt)
+            if run.finished:
+                self.secondary_runs.remove(run)
 
     def _script_command(self, dt):
         """This cycle's JointCommand of the primary program; its end makes the program stop."""
-        while self.script_step is None and self.script_queue:
-            self._run_statement(self.script_queue.pop(0))
-        if self.script_step is None:
-            self.script_running = False
-            self.robot.script_finished()
+        run = self.script_run
+        if not self.robot.moving_allowed:
+            # Paused (or protectively stopped): the program waits where it is.
             return self._hold()
-        step = self.script_step
-        if self.robot.moving_allowed:
-            step[1] += dt * self.robot.speed_slider
-        if step[1] >= step[0].total_time:
-            self.script_step = None
-        if isinstance(step[0], urscript.Wait):
+        # The speed slider slows the program's time, its motions with it.
+        dt = dt * self.robot.speed_slider
+        self._step_run(run, dt)
+        if run.error is not None:
+            self._end_script()
             return self._hold()
-        return jm.JointCommand(jm.MOVE, step[0].position(step[1]))
+        try:
+            position = self.script_robot.command(dt)
+        except urscript.RuntimeFault as exc:
+            run.stop()
+            self._runtime_exception(exc)
+            self._end_script()
+            return self._hold()
+        if run.finished and not self.script_robot.moving:
+            self._end_script()
+        return jm.JointCommand(jm.MOVE, position)
 
     # -- the control cycle ---------------------------------------------------------------------------
 
@@ -596,6 +606,7 @@ class ArmCore(object):
         """One control cycle of `dt` seconds: the Snapshot to publish."""
         self.robot.step(dt)
         self._controller_stopper()
+        self._secondary_programs(dt)
         command, limit_factor, twisting = self._command(dt)
         if not self.robot.moving_allowed:
             # Stopped, paused or protectively stopped: the controllers ran (their time goes on,

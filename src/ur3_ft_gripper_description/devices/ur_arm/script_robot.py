@@ -1,0 +1,491 @@
+"""What URScript programs call on the simulated robot: motion, force mode, state, set-up and IO; no ROS.
+
+The language (parsing, variables, control flow, threads) is the urscript
+package's; it hands every call of a robot function to `ScriptRobot.call`.
+This module is the robot's side, as the URScript manual defines each
+function (its defaults and units), for the generation the simulated robot
+reports (ControllerSoftware): `served()` names the functions it offers, so
+that a program calling one the robot lacks, or one the manual has and the
+simulation does not offer, is refused whole when it compiles.
+
+Motions come from tool_motion (movej, movel, movep, servoj, speedj, speedl,
+stopj, stopl); a call that moves returns an urscript.Blocking that frees the
+program when the motion returns (at its end, or on entering its blend
+radius). force_mode (force_mode.py) displaces whatever the program commands
+along its compliant axes, driven by the robot's own TCP wrench
+(tcp_wrench.py, the flange's reading on physics; zero without physics, where
+the compliant axes then run at their speed limits as in URSim).
+
+Every cycle the arm's core calls `command(dt)` for the joint positions to
+command. Errors a call can meet (an unreachable pose, a bad argument) raise
+urscript.RuntimeFault, which stops the program as the robot's runtime
+exception does.
+"""
+
+import numpy as np
+
+from ...urscript import Blocking, Pose, RuntimeFault
+from ...urscript.values import to_str
+from . import cartesian
+from . import force_mode as fm
+from . import tool_motion as tm
+from .arm_kinematics import rigid_inverse
+
+# IO numbering of ur_msgs/IOStates (and of the core's set_io): 0-7 standard, 8-15 configurable, 16-17 tool.
+CONFIGURABLE_OFFSET, TOOL_OFFSET = 8, 16
+# is_steady(): every joint slower than this (rad/s) and no motion running.
+STEADY_SPEED = 1e-3
+# At a program's end a speed motion still running is stopped with this deceleration (rad/s^2), as
+# the robot decelerates the arm when its program stops.
+END_OF_PROGRAM_DECELERATION = 4.0
+A = object()  # stands for "the value of argument a" (stopl's and speedl's aRot default)
+
+
+class Signature(object):
+    """A function's parameter names and defaults (a parameter without a default is required)."""
+
+    def __init__(self, physical_time, *params, **defaults):
+        self.physical_time = physical_time
+        self.params = params
+        self.defaults = defaults
+
+    def bind(self, name, args, kwargs):
+        if len(args) > len(self.params):
+            raise RuntimeFault('%s takes at most %d arguments, %d given' % (name, len(self.params), len(args)))
+        bound = dict(zip(self.params, args))
+        for key, value in kwargs.items():
+            if key not in self.params:
+                raise RuntimeFault('%s has no argument named %s' % (name, key))
+            bound[key] = value
+        for param in self.params:
+            if param not in bound:
+                if param not in self.defaults:
+                    raise RuntimeFault('%s: argument %s is missing' % (name, param))
+                bound[param] = self.defaults[param]
+        return bound
+
+
+def _signatures(e_series, version):
+    """{name: Signature} of the functions the simulated robot of this generation offers."""
+    move, now = True, False
+    functions = {
+        'movej': Signature(move, 'q', 'a', 'v', 't', 'r', a=tm.MOVEJ_A, v=tm.MOVEJ_V, t=0.0, r=0.0),
+        'movel': Signature(move, 'pose', 'a', 'v', 't', 'r', a=tm.MOVEL_A, v=tm.MOVEL_V, t=0.0, r=0.0),
+        'movep': Signature(move, 'pose', 'a', 'v', 'r', a=tm.MOVEP_A, v=tm.MOVEP_V, r=0.0),
+        'servoj': Signature(move, 'q', 'a', 'v', 't', 'lookahead_time', 'gain', a=0.0, v=0.0, t=tm.SERVOJ_T,
+                            lookahead_time=tm.SERVOJ_LOOKAHEAD_TIME, gain=tm.SERVOJ_GAIN),
+        'speedj': Signature(move, 'qd', 'a', 't', t=0.0),
+        'speedl': Signature(move, 'xd', 'a', 't', 'aRot', t=0.0, aRot=A),
+        'stopj': Signature(move, 'a'),
+        'stopl': Signature(move, 'a', 'aRot', aRot=A),
+        'force_mode': Signature(now, 'task_frame', 'selection_vector', 'wrench', 'type', 'limits'),
+        'end_force_mode': Signature(now),
+        'force_mode_set_damping': Signature(now, 'damping'),
+        'get_actual_joint_positions': Signature(now),
+        'get_target_joint_positions': Signature(now),
+        'get_actual_joint_speeds': Signature(now),
+        'get_target_joint_speeds': Signature(now),
+        'get_actual_tcp_pose': Signature(now),
+        'get_target_tcp_pose': Signature(now),
+        'get_actual_tool_flange_pose': Signature(now),
+        'get_actual_tcp_speed': Signature(now),
+        'get_target_tcp_speed': Signature(now),
+        'get_tcp_force': Signature(now),
+        'get_tcp_offset': Signature(now),
+        'get_inverse_kin': Signature(now, 'x', 'qnear', 'maxPositionError', 'maxOrientationError', 'tcp',
+                                     qnear=None, maxPositionError=1e-10, maxOrientationError=1e-10, tcp=None),
+        'get_forward_kin': Signature(now, 'q', 'tcp', q=None, tcp=None),
+        'is_steady': Signature(now),
+        'tool_pose': Signature(now),
+        'set_tcp': Signature(now, 'pose'),
+        'set_payload': Signature(now, 'm', 'cog', cog=None),
+        'set_payload_mass': Signature(now, 'm'),
+        'set_payload_cog': Signature(now, 'CoG'),
+        'set_standard_digital_out': Signature(now, 'n', 'b'),
+        'set_configurable_digital_out': Signature(now, 'n', 'b'),
+        'set_tool_digital_out': Signature(now, 'n', 'b'),
+        'set_digital_out': Signature(now, 'n', 'b'),
+        'set_standard_analog_out': Signature(now, 'n', 'f'),
+        'set_analog_out': Signature(now, 'n', 'f'),
+        'set_tool_voltage': Signature(now, 'voltage'),
+        'get_standard_digital_in': Signature(now, 'n'),
+        'get_standard_digital_out': Signature(now, 'n'),
+        'get_configurable_digital_in': Signature(now, 'n'),
+        'get_configurable_digital_out': Signature(now, 'n'),
+        'get_tool_digital_in': Signature(now, 'n'),
+        'get_tool_digital_out': Signature(now, 'n'),
+        'get_digital_in': Signature(now, 'n'),
+        'get_digital_out': Signature(now, 'n'),
+        'get_standard_analog_in': Signature(now, 'n'),
+        'get_analog_in': Signature(now, 'n'),
+        'textmsg': Signature(now, 's1', 's2', s2=''),
+        'popup': Signature(now, 's', 'title', 'warning', 'error', 'blocking', title='Popup', warning=False,
+                           error=False, blocking=False),
+        'freedrive_mode': Signature(now),
+        'end_freedrive_mode': Signature(now),
+        'teach_mode': Signature(now),
+        'end_teach_mode': Signature(now),
+    }
+    if e_series:
+        # The e-Series' own: its flange sensor, and force mode's gain.
+        functions['zero_ftsensor'] = Signature(now)
+        functions['force_mode_set_gain_scaling'] = Signature(now, 'scaling')
+        if tuple(version[:2]) >= (5, 10):
+            functions['set_target_payload'] = Signature(now, 'mass', 'center_of_gravity', 'inertia',
+                                                        'transition_time', inertia=None, transition_time=0.0)
+    return functions
+
+
+def _floats(value, length, what):
+    try:
+        values = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise RuntimeFault('%s must be a list of %d numbers' % (what, length)) from None
+    if len(values) != length or not np.all(np.isfinite(values)):
+        raise RuntimeFault('%s must be a list of %d finite numbers' % (what, length))
+    return np.array(values)
+
+
+def _matrix(pose, what):
+    if not isinstance(pose, Pose):
+        raise RuntimeFault('%s must be a pose p[x, y, z, rx, ry, rz]' % what)
+    return cartesian.pose_from_ur_pose(_floats(pose, 6, what))
+
+
+def _pose(matrix):
+    return Pose(tm.ur_pose_of(matrix))
+
+
+class ScriptRobot(object):
+    """The robot's functions for programs, over the arm's core (core.ArmCore) it belongs to."""
+
+    def __init__(self, core):
+        self.core = core
+        software = core.software
+        self.signatures = _signatures(software.e_series, software.version)
+        self.motion = None            # the tool_motion in progress
+        self.force = None             # force_mode.ForceMode while force mode is on
+        self.force_damping, self.force_gain = fm.DEFAULT_DAMPING, fm.DEFAULT_GAIN_SCALING
+        self.force_offset = np.eye(4)  # force mode's displacement of the TCP (base axes, about the TCP)
+        self.commanded = None         # the joints commanded last cycle
+        self.commanded_speed = np.zeros(6)
+
+    def served(self):
+        """{name: whether a call takes physical time}, for urscript.compile_script."""
+        return {name: signature.physical_time for name, signature in self.signatures.items()}
+
+    # -- the control cycle -------------------------------------------------------------------------
+
+    def start(self):
+        """A program starts: it commands from where the joints are."""
+        self.motion, self.force = None, None
+        self.force_offset = np.eye(4)
+        self.commanded = np.array(self.core.motion.position, dtype=float)
+        self.planned = self.commanded.copy()
+        self.commanded_speed = np.zeros(6)
+
+    @property
+    def moving(self):
+        return self.motion is not None and not self.motion.done
+
+    def finish(self):
+        """The program ended: force mode ends, and a speed motion still running decelerates."""
+        self._end_force_mode()
+        if self.moving and isinstance(self.motion, (tm.ToolSpeed, tm.JointSpeed)) and \
+                not isinstance(self.motion, (tm.ToolStop, tm.JointStop)):
+            self.motion = tm.JointStop(self.core.arm, self.planned, self.commanded_speed,
+                                       END_OF_PROGRAM_DECELERATION, previous=self.motion)
+
+    def command(self, dt):
+        """The joint positions to command for the end of this cycle of `dt` s (RuntimeFault if the arm cannot)."""
+        arm = self.core.arm
+        if self.motion is not None:
+            try:
+                self.planned = self.motion.step(dt)
+            except tm.MotionError as exc:
+                self.motion = None
+                raise RuntimeFault(str(exc)) from None
+        target = self.planned
+        if self.force is not None or not np.allclose(self.force_offset, np.eye(4)):
+            tcp = self.core.tcp
+            pose = tm.tcp_pose(arm, tcp, self.planned)
+            if self.force is not None:
+                external = self.core.tcp_force()[0]
+                linear, angular = self.force.step(dt, self.force_offset[:3, 3] + pose[:3, 3], external)
+                self.force_offset = fm.displaced(self.force_offset, linear, angular)
+            pose[:3, 3] += self.force_offset[:3, 3]
+            pose[:3, :3] = self.force_offset[:3, :3].dot(pose[:3, :3])
+            target = arm.inverse(pose.dot(rigid_inverse(tcp)), self.commanded)
+            if target is None:
+                raise RuntimeFault('force_mode: the pose it asks for is out of the arm\'s reach')
+        if dt > 0:
+            self.commanded_speed = (target - self.commanded) / dt
+        self.commanded = np.array(target, dtype=float)
+        return self.commanded
+
+    # -- calls -------------------------------------------------------------------------------------
+
+    def call(self, name, args, kwargs):
+        signature = self.signatures.get(name)
+        if signature is None:
+            raise RuntimeFault('%s is not a function of the simulated robot' % name)
+        bound = signature.bind(name, args, kwargs)
+        return getattr(self, '_' + name)(**bound)
+
+    def _start_motion(self, motion):
+        self.motion = motion
+        return Blocking(lambda: motion.returned or self.motion is not motion)
+
+    def _previous(self):
+        return self.motion if self.moving else None
+
+    def _q_start(self):
+        """Where a new motion starts: the program's own joints (force mode's displacement stays apart)."""
+        if self.force is None and not self.moving:
+            # Force mode ended where it brought the arm: from there the program goes on.
+            self.force_offset = np.eye(4)
+            self.planned = self.commanded.copy()
+        return self.planned, self.commanded_speed
+
+    def _motion(self, build):
+        try:
+            return self._start_motion(build())
+        except tm.MotionError as exc:
+            raise RuntimeFault(str(exc)) from None
+
+    def _joints_or_pose(self, target, what):
+        if isinstance(target, Pose):
+            flange = _matrix(target, what).dot(rigid_inverse(self.core.tcp))
+            solved = self.core.arm.nearest_inverse(flange, self._q_start()[0])
+            if solved is None:
+                raise RuntimeFault('%s: the pose %s is out of the arm\'s reach' % (what, to_str(target)))
+            return solved
+        return _floats(target, 6, what)
+
+    def _movej(self, q, a, v, t, r):
+        target = self._joints_or_pose(q, 'movej')
+        return self._motion(lambda: tm.JointMove(self.core.arm, *self._q_start(), q_target=target, a=a, v=v,
+                                                 t=t, r=r, tcp=self.core.tcp, previous=self._previous()))
+
+    def _cartesian_target(self, pose, what):
+        if not isinstance(pose, Pose):
+            # movel and movep take joint positions too: the pose they give.
+            return tm.tcp_pose(self.core.arm, self.core.tcp, _floats(pose, 6, what))
+        return _matrix(pose, what)
+
+    def _movel(self, pose, a, v, t, r):
+        target = self._cartesian_target(pose, 'movel')
+        return self._motion(lambda: tm.LinearMove(self.core.arm, self.core.tcp, *self._q_start(), target_pose=target,
+                                                  a=a, v=v, t=t, r=r, previous=self._previous()))
+
+    def _movep(self, pose, a, v, r):
+        target = self._cartesian_target(pose, 'movep')
+        return self._motion(lambda: tm.ProcessMove(self.core.arm, self.core.tcp, *self._q_start(),
+                                                   target_pose=target, a=a, v=v, r=r, previous=self._previous()))
+
+    def _servoj(self, q, a, v, t, lookahead_time, gain):
+        target = _floats(q, 6, 'servoj')
+        return self._motion(lambda: tm.Servo(self.core.arm, *self._q_start(), q=target, a=a, v=v, t=t,
+                                             lookahead_time=lookahead_time, gain=gain, previous=self._previous()))
+
+    def _speedj(self, qd, a, t):
+        speeds = _floats(qd, 6, 'speedj')
+        return self._motion(lambda: tm.JointSpeed(self.core.arm, *self._q_start(), qd=speeds, a=a, t=t,
+                                                  minimum_time=not self.core.software.e_series,
+                                                  previous=self._previous()))
+
+    def _speedl(self, xd, a, t, aRot):
+        twist = _floats(xd, 6, 'speedl')
+        return self._motion(lambda: tm.ToolSpeed(self.core.arm, self.core.tcp, *self._q_start(), xd=twist, a=a, t=t,
+                                                 aRot=a if aRot is A else aRot,
+                                                 minimum_time=self.core.software.version[:2] < (3, 3),
+                                                 previous=self._previous()))
+
+    def _stopj(self, a):
+        return self._motion(lambda: tm.JointStop(self.core.arm, *self._q_start(), a=a, previous=self._previous()))
+
+    def _stopl(self, a, aRot):
+        return self._motion(lambda: tm.ToolStop(self.core.arm, self.core.tcp, *self._q_start(), a=a,
+                                                aRot=a if aRot is A else aRot, previous=self._previous()))
+
+    # force mode
+
+    def _force_mode(self, task_frame, selection_vector, wrench, type, limits):
+        frame = _matrix(task_frame, 'force_mode: task_frame')
+        try:
+            force = fm.ForceMode(frame, selection_vector, wrench, type, limits, self.force_damping, self.force_gain)
+        except fm.ForceModeError as exc:
+            raise RuntimeFault(str(exc)) from None
+        if self.force is not None:
+            force.velocity = self.force.velocity
+        self.force = force
+
+    def _end_force_mode(self):
+        """The arm stays where force mode brought it (the displacement is kept until the next motion)."""
+        self.force = None
+
+    def _force_mode_set_damping(self, damping):
+        self.force_damping = min(max(float(damping), 0.0), 1.0)
+
+    def _force_mode_set_gain_scaling(self, scaling):
+        self.force_gain = min(max(float(scaling), 0.0), 2.0)
+
+    # state
+
+    def _actual(self):
+        return np.array(self.core.motion.position, dtype=float), np.array(self.core.motion.velocity, dtype=float)
+
+    def _get_actual_joint_positions(self):
+        return [float(v) for v in self._actual()[0]]
+
+    def _get_target_joint_positions(self):
+        return [float(v) for v in self.commanded]
+
+    def _get_actual_joint_speeds(self):
+        return [float(v) for v in self._actual()[1]]
+
+    def _get_target_joint_speeds(self):
+        return [float(v) for v in self.commanded_speed]
+
+    def _get_actual_tcp_pose(self):
+        return _pose(tm.tcp_pose(self.core.arm, self.core.tcp, self._actual()[0]))
+
+    _tool_pose = _get_actual_tcp_pose
+
+    def _get_target_tcp_pose(self):
+        return _pose(tm.tcp_pose(self.core.arm, self.core.tcp, self.commanded))
+
+    def _get_actual_tool_flange_pose(self):
+        return _pose(self.core.arm.forward(self._actual()[0]))
+
+    def _tcp_speed(self, q, qd):
+        twist = tm.tcp_jacobian(self.core.arm, self.core.tcp, q).dot(qd)
+        return [float(v) for v in twist]
+
+    def _get_actual_tcp_speed(self):
+        return self._tcp_speed(*self._actual())
+
+    def _get_target_tcp_speed(self):
+        return self._tcp_speed(self.commanded, self.commanded_speed)
+
+    def _get_tcp_force(self):
+        return Pose([float(v) for v in self.core.tcp_force()[0]])
+
+    def _get_tcp_offset(self):
+        return _pose(self.core.tcp)
+
+    def _get_inverse_kin(self, x, qnear, maxPositionError, maxOrientationError, tcp):
+        offset = self.core.tcp if tcp is None else _matrix(tcp, 'get_inverse_kin: tcp')
+        near = self._actual()[0] if qnear is None else _floats(qnear, 6, 'get_inverse_kin: qnear')
+        solved = self.core.arm.nearest_inverse(_matrix(x, 'get_inverse_kin: x').dot(rigid_inverse(offset)), near)
+        if solved is None:
+            raise RuntimeFault('get_inverse_kin: no solution for the pose %s' % to_str(x))
+        return [float(v) for v in solved]
+
+    def _get_forward_kin(self, q, tcp):
+        joints = self._actual()[0] if q is None else _floats(q, 6, 'get_forward_kin: q')
+        offset = self.core.tcp if tcp is None else _matrix(tcp, 'get_forward_kin: tcp')
+        return _pose(tm.tcp_pose(self.core.arm, offset, joints))
+
+    def _is_steady(self):
+        return bool(not self.moving and np.all(np.abs(self._actual()[1]) < STEADY_SPEED))
+
+    # set-up
+
+    def _set_tcp(self, pose):
+        self.core.tcp = _matrix(pose, 'set_tcp')
+
+    def _set_payload(self, m, cog):
+        centre = self.core.robot.payload[1] if cog is None else tuple(_floats(cog, 3, 'set_payload: cog'))
+        self._payload(m, centre)
+
+    def _set_payload_mass(self, m):
+        self._payload(m, self.core.robot.payload[1])
+
+    def _set_payload_cog(self, CoG):
+        self._payload(self.core.robot.payload[0], tuple(_floats(CoG, 3, 'set_payload_cog')))
+
+    def _set_target_payload(self, mass, center_of_gravity, inertia, transition_time):
+        self._payload(mass, tuple(_floats(center_of_gravity, 3, 'set_target_payload: center_of_gravity')))
+
+    def _payload(self, mass, centre):
+        ok, message = self.core.robot.set_payload(float(mass), centre)
+        if not ok:
+            raise RuntimeFault('set_payload: %s' % message)
+
+    def _zero_ftsensor(self):
+        self.core.zero_ftsensor()
+
+    # IO
+
+    def _io(self, what, fun, pin, value):
+        ok, message = self.core.robot.set_io(fun, pin, value)
+        if not ok:
+            raise RuntimeFault('%s: %s' % (what, message))
+
+    def _set_standard_digital_out(self, n, b):
+        self._io('set_standard_digital_out', 1, int(n), 1.0 if b else 0.0)
+
+    _set_digital_out = _set_standard_digital_out
+
+    def _set_configurable_digital_out(self, n, b):
+        self._io('set_configurable_digital_out', 1, int(n) + CONFIGURABLE_OFFSET, 1.0 if b else 0.0)
+
+    def _set_tool_digital_out(self, n, b):
+        self._io('set_tool_digital_out', 1, int(n) + TOOL_OFFSET, 1.0 if b else 0.0)
+
+    def _set_standard_analog_out(self, n, f):
+        self._io('set_standard_analog_out', 3, int(n), float(f))
+
+    _set_analog_out = _set_standard_analog_out
+
+    def _set_tool_voltage(self, voltage):
+        self._io('set_tool_voltage', 4, 0, float(voltage))
+
+    def _pin(self, values, n, offset, count, what):
+        n = int(n)
+        if not 0 <= n < count:
+            raise RuntimeFault('%s: pin %d does not exist (0 to %d)' % (what, n, count - 1))
+        return values[n + offset]
+
+    def _get_standard_digital_in(self, n):
+        return bool(self._pin(self.core.robot.digital_in, n, 0, 8, 'get_standard_digital_in'))
+
+    _get_digital_in = _get_standard_digital_in
+
+    def _get_standard_digital_out(self, n):
+        return bool(self._pin(self.core.robot.digital_out, n, 0, 8, 'get_standard_digital_out'))
+
+    _get_digital_out = _get_standard_digital_out
+
+    def _get_configurable_digital_in(self, n):
+        return bool(self._pin(self.core.robot.digital_in, n, CONFIGURABLE_OFFSET, 8, 'get_configurable_digital_in'))
+
+    def _get_configurable_digital_out(self, n):
+        return bool(self._pin(self.core.robot.digital_out, n, CONFIGURABLE_OFFSET, 8,
+                              'get_configurable_digital_out'))
+
+    def _get_tool_digital_in(self, n):
+        return bool(self._pin(self.core.robot.digital_in, n, TOOL_OFFSET, 2, 'get_tool_digital_in'))
+
+    def _get_tool_digital_out(self, n):
+        return bool(self._pin(self.core.robot.digital_out, n, TOOL_OFFSET, 2, 'get_tool_digital_out'))
+
+    def _get_standard_analog_in(self, n):
+        return float(self._pin(self.core.robot.analog_in, n, 0, len(self.core.robot.analog_in),
+                               'get_standard_analog_in'))
+
+    _get_analog_in = _get_standard_analog_in
+
+    # the log and the rest
+
+    def _textmsg(self, s1, s2):
+        self.core.robot_log(to_str(s1) + to_str(s2))
+
+    def _popup(self, s, title, warning, error, blocking):
+        self.core.robot_log('%s: %s' % (to_str(title), to_str(s)))
+
+    def _freedrive_mode(self):
+        """Nobody guides the simulated arm by hand: in freedrive it stays where it is."""
+
+    _end_freedrive_mode = _teach_mode = _end_teach_mode = _freedrive_mode
