@@ -10,7 +10,10 @@ without ``physics:=true``):
 * ``Gripper2F``: Robotiq's register topics ``Robotiq2FGripperRobotOutput`` /
   ``Robotiq2FGripperRobotInput`` (2F-85 & 2F-140 manual, section 4);
 * ``FT300``: rq_sensor's ``robotiq_ft_wrench`` and its ``robotiq_ft_sensor_acc``
-  service (command_id 8: SET_ZERO).
+  service (command_id 8: SET_ZERO);
+* ``UrScript``: ur_robot_driver's ``script_command`` (URScript programs),
+  ``robot_program_running``, the robot's own ``wrench`` and the dashboard's
+  ``play``, which hands control back to External Control.
 
 Where the tool goes is planned with ``ToolKinematics``: the arm's inverse
 kinematics for the model in ``robot_description`` (yours, calibrated), for
@@ -293,6 +296,62 @@ class FT300(object):
         if not readings:
             raise CellError('no robotiq_ft_wrench in %g s' % seconds)
         return tuple(float(v) for v in np.mean(readings, axis=0))
+
+
+class UrScript(object):
+    """URScript programs through ur_robot_driver: sent on script_command, run by the robot itself.
+
+    A program (`def ...: ... end`) replaces the External Control program: the ROS controllers stop
+    commanding until `resume()` plays it again (the dashboard's play; with headless_mode,
+    resend_robot_program).
+    """
+
+    def __init__(self, rospy, timeout=30.0, headless=False):
+        from geometry_msgs.msg import WrenchStamped
+        from std_msgs.msg import Bool, String
+        self.rospy, self.headless, self.timeout = rospy, headless, timeout
+        self.program_running = None
+        self.wrenches = collections.deque(maxlen=3000)  # (stamp, (fx, fy, fz, tx, ty, tz)) in tool0_controller
+        self._lock = threading.Lock()
+        self.publisher = rospy.Publisher(HARDWARE_INTERFACE + 'script_command', String, queue_size=1)
+        rospy.Subscriber(HARDWARE_INTERFACE + 'robot_program_running', Bool,
+                         lambda msg: setattr(self, 'program_running', msg.data), queue_size=1)
+        rospy.Subscriber('wrench', WrenchStamped, self._on_wrench, queue_size=100)
+        wait_until(rospy, lambda: self.publisher.get_num_connections() > 0, 'subscriber of script_command', timeout)
+        wait_until(rospy, lambda: self.program_running is not None, 'robot_program_running', timeout)
+
+    def _on_wrench(self, msg):
+        f, t = msg.wrench.force, msg.wrench.torque
+        with self._lock:
+            self.wrenches.append((msg.header.stamp.to_sec(), (f.x, f.y, f.z, t.x, t.y, t.z)))
+
+    def run(self, program):
+        """Send `program` and wait until it replaced External Control (robot_program_running false)."""
+        from std_msgs.msg import String
+        self.publisher.publish(String(data=program))
+        wait_until(self.rospy, lambda: self.program_running is False, 'start of the program sent', self.timeout)
+
+    def wrench_since(self, start, end=float('inf')):
+        """The robot's own wrench readings stamped from `start` (s, ROS time) to `end`."""
+        with self._lock:
+            return [w for t, w in self.wrenches if start <= t <= end]
+
+    def resume(self):
+        """External Control again: the ROS controllers command the arm."""
+        from std_srvs.srv import Trigger
+        name = HARDWARE_INTERFACE + ('resend_robot_program' if self.headless else 'dashboard/play')
+        self.rospy.wait_for_service(name, self.timeout)
+        reply = self.rospy.ServiceProxy(name, Trigger)()
+        if not reply.success:
+            raise CellError('%s refused: %s' % (name, reply.message))
+        wait_until(self.rospy, lambda: self.program_running, 'External Control running again', self.timeout)
+
+
+def mean_wrench(readings):
+    """The mean of wrench readings (fx, fy, fz, tx, ty, tz); CellError if there are none."""
+    if not readings:
+        raise CellError('no wrench readings to average')
+    return tuple(float(v) for v in np.mean(readings, axis=0))
 
 
 def force_norm(wrench):
