@@ -1,0 +1,233 @@
+"""URScript text to a small syntax tree, with lark and grammar.lark.
+
+The grammar is the one home of the syntax; this module loads it (reading the
+file itself, so an installed package finds it beside this module), drops the
+newlines inside brackets, and turns lark's tree into `Node`s that carry their
+line and column. Every lark option is given explicitly: the same code runs on
+lark-parser 0.8.1 (Ubuntu 20.04) and lark 1.1.x (22.04, 24.04, Debian 12).
+"""
+
+import os
+
+import lark
+
+GRAMMAR_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'grammar.lark')
+
+try:  # lark 1.x
+    from lark.exceptions import UnexpectedEOF
+except ImportError:  # lark-parser 0.8: an early end is an UnexpectedToken on $END
+    UnexpectedEOF = ()
+
+
+KEYWORDS = frozenset(['def', 'sec', 'thread', 'end', 'if', 'elif', 'else', 'while', 'return', 'break',
+                      'continue', 'halt', 'run', 'join', 'kill', 'local', 'global', 'and', 'or', 'xor',
+                      'not', 'True', 'False'])
+
+
+class CompileError(ValueError):
+    """A script the robot would refuse before running it: `line N: what`."""
+
+    def __init__(self, message, line=1, column=1):
+        self.line = line
+        self.column = column
+        self.message = message
+        ValueError.__init__(self, 'line %d: %s' % (line, message))
+
+
+class Node(object):
+    """One construct of the script: `kind`, where it starts, and its parts."""
+
+    __slots__ = ('kind', 'line', 'column', 'a', 'b', 'c', 'd')
+
+    def __init__(self, kind, line, column, a=None, b=None, c=None, d=None):
+        self.kind = kind
+        self.line = line
+        self.column = column
+        self.a, self.b, self.c, self.d = a, b, c, d
+
+    def __repr__(self):
+        return 'Node(%s@%d:%d %r %r %r %r)' % (self.kind, self.line, self.column, self.a, self.b, self.c, self.d)
+
+
+class _BracketNewlines(object):
+    """Post-lexer: a newline inside (...) or [...] continues the expression."""
+
+    always_accept = ('_NL',)  # the contextual lexer must still see them
+
+    def process(self, stream):
+        depth = 0
+        for token in stream:
+            if token.type == '_NL':
+                if depth:
+                    continue
+            elif token.value in ('(', '[', 'p['):
+                depth += 1
+            elif token.value in (')', ']'):
+                depth = max(0, depth - 1)
+            yield token
+
+
+_PARSER = None
+
+
+def _parser():
+    global _PARSER
+    if _PARSER is None:
+        with open(GRAMMAR_FILE) as f:
+            grammar = f.read()
+        _PARSER = lark.Lark(grammar, parser='lalr', lexer='contextual', start='start',
+                            propagate_positions=True, maybe_placeholders=False,
+                            keep_all_tokens=False, postlex=_BracketNewlines(), debug=False)
+    return _PARSER
+
+
+def _describe(token):
+    if token is None or token.type == '$END':
+        return 'end of script'
+    if token.type == '_NL':
+        return 'end of line'
+    return '"%s"' % token.value
+
+
+def parse(text):
+    """[Node] of the script's top-level statements; raises CompileError naming the line."""
+    source = text.replace('\r\n', '\n') + '\n'
+    try:
+        tree = _parser().parse(source)
+    except lark.exceptions.UnexpectedCharacters as exc:
+        raise CompileError('unexpected character "%s"' % source[exc.pos_in_stream], exc.line, exc.column)
+    except lark.exceptions.UnexpectedToken as exc:
+        token = exc.token
+        if token.type == '$END' or getattr(token, 'line', None) is None:
+            last = max(1, len(text.rstrip().splitlines()))
+            raise CompileError('unexpected end of script: a bracket or a block is not closed', last, 1)
+        raise CompileError('unexpected %s' % _describe(token), token.line, token.column)
+    except UnexpectedEOF:
+        last = max(1, len(text.rstrip().splitlines()))
+        raise CompileError('unexpected end of script: a bracket or a block is not closed', last, 1)
+    return [_build(child) for child in tree.children]
+
+
+def _pos(item):
+    if isinstance(item, lark.Token):
+        return item.line, item.column
+    meta = item.meta
+    return getattr(meta, 'line', 1), getattr(meta, 'column', 1)
+
+
+def _ident(token):
+    # Where the grammar expects no keyword, the contextual lexer reads one as a NAME.
+    if str(token) in KEYWORDS:
+        raise CompileError('unexpected "%s"' % token, token.line, token.column)
+    return str(token)
+
+
+def _block(tree):
+    return [_build(child) for child in tree.children]
+
+
+def _build(t):
+    """Node of one lark tree or token."""
+    line, column = _pos(t)
+    if isinstance(t, lark.Token):
+        raise CompileError('unexpected "%s"' % t.value, line, column)
+    kind, ch = t.data, t.children
+    if kind == 'assign':
+        target = _build(ch[0])
+        if target.kind not in ('name', 'index'):
+            raise CompileError('cannot assign to an expression', line, column)
+        node = target
+        while node.kind == 'index':
+            node = node.a
+        if node.kind != 'name':
+            raise CompileError('cannot assign to an expression', line, column)
+        return Node('assign', line, column, target, _build(ch[1]))
+    if kind in ('local_assign', 'global_assign'):
+        return Node(kind, line, column, _ident(ch[0]), _build(ch[1]))
+    if kind == 'expr_stmt':
+        return Node('expr', line, column, _build(ch[0]))
+    if kind == 'return_stmt':
+        return Node('return', line, column, _build(ch[0]) if ch else None)
+    if kind in ('break_stmt', 'continue_stmt', 'halt_stmt'):
+        return Node(kind[:-len('_stmt')], line, column)
+    if kind in ('join_stmt', 'kill_stmt'):
+        return Node(kind[:-len('_stmt')], line, column, _build(ch[0]))
+    if kind == 'if_stmt':
+        branches = [(_build(ch[0]), _block(ch[1]))]
+        orelse = None
+        for clause in ch[2:]:
+            if clause.data == 'elif_clause':
+                branches.append((_build(clause.children[0]), _block(clause.children[1])))
+            else:
+                orelse = _block(clause.children[0])
+        return Node('if', line, column, branches, orelse)
+    if kind == 'while_stmt':
+        return Node('while', line, column, _build(ch[0]), _block(ch[1]))
+    if kind == 'funcdef':
+        params = []
+        body = ch[-1]
+        if len(ch) == 3:
+            for p in ch[1].children:
+                default = _build(p.children[1]) if len(p.children) > 1 else None
+                params.append((_ident(p.children[0]), default))
+        names = [p for p, _ in params]
+        if len(set(names)) != len(names):
+            raise CompileError('function %s names a parameter twice' % ch[0], line, column)
+        return Node('def', line, column, _ident(ch[0]), params, _block(body))
+    if kind in ('secdef', 'threaddef'):
+        return Node('sec' if kind == 'secdef' else 'thread', line, column, _ident(ch[0]), [], _block(ch[1]))
+    # Expressions.
+    if kind == 'number':
+        text = str(ch[0])
+        if '.' in text or 'e' in text or 'E' in text:
+            return Node('const', line, column, float(text))
+        return Node('const', line, column, int(text))
+    if kind == 'string':
+        return Node('const', line, column, str(ch[0])[1:-1])
+    if kind == 'true':
+        return Node('const', line, column, True)
+    if kind == 'false':
+        return Node('const', line, column, False)
+    if kind == 'name':
+        return Node('name', line, column, _ident(ch[0]))
+    if kind == 'call':
+        args, kwargs = [], []
+        if len(ch) > 1:
+            for arg in ch[1].children:
+                if arg.data == 'kwarg':
+                    if kwargs and str(arg.children[0]) in [k for k, _ in kwargs]:
+                        raise CompileError('argument %s given twice' % arg.children[0], *_pos(arg))
+                    kwargs.append((_ident(arg.children[0]), _build(arg.children[1])))
+                else:
+                    if kwargs:
+                        raise CompileError('a positional argument follows a named one', *_pos(arg))
+                    args.append(_build(arg.children[0]))
+        return Node('call', line, column, _ident(ch[0]), args, kwargs)
+    if kind == 'run_thread':
+        return Node('run', line, column, _ident(ch[0]))
+    if kind == 'list_lit':
+        return Node('list', line, column, [_build(e) for e in ch[0].children] if ch else [])
+    if kind == 'pose_lit':
+        items = [_build(e) for e in ch[1].children]
+        if len(items) != 6:
+            raise CompileError('a pose has 6 elements, not %d' % len(items), line, column)
+        return Node('pose', line, column, items)
+    if kind == 'index':
+        return Node('index', line, column, _build(ch[0]), _build(ch[1]))
+    if kind in ('neg', 'pos'):
+        return Node(kind, line, column, _build(ch[1]))
+    if kind == 'not_op':
+        return Node('not', line, column, _build(ch[0]))
+    if kind in ('or_expr', 'xor_expr', 'and_expr'):
+        op = kind[:-len('_expr')]
+        node = _build(ch[0])
+        for operand in ch[1:]:
+            node = Node(op, line, column, node, _build(operand))
+        return node
+    if kind in ('sum', 'term', 'comparison'):
+        node = _build(ch[0])
+        for i in range(1, len(ch), 2):
+            op = ch[i]
+            node = Node('binop', op.line, op.column, str(op), node, _build(ch[i + 1]))
+        return node
+    raise CompileError('unsupported construct %s' % kind, line, column)  # grammar and builder disagree
