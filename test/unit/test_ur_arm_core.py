@@ -403,6 +403,48 @@ def test_a_runtime_error_stops_the_program_with_the_robots_runtime_exception(arm
         assert np.array_equal(arm.motion.position, START)
 
 
+def test_a_program_replaces_external_control_and_play_resumes_it(arm):
+    arm.script_command('def p():\n  movel(pose_trans(get_actual_tcp_pose(), p[0, 0, 0.02, 0, 0, 0]), a=0.5, v=0.1)\nend')
+    run(arm, DT)
+    assert arm.script_running and not arm.robot.program_running
+    run_until(arm, lambda: not arm.script_running, 5.0)
+    assert arm.dashboard('play').startswith('Starting program')
+    run(arm, 0.1)
+    assert arm.robot.program_running
+
+
+def test_a_secondary_program_runs_beside_and_may_not_move(arm):
+    arm.script_command('sec s():\n  movel(p[0.3, 0.1, 0.3, 0, 3.14, 0])\nend')
+    level, text = arm.take_messages()[-1]
+    assert level == arm_core.ERROR and 'would not compile' in text and 'line 2' in text
+    arm.script_command('sec s():\n  textmsg("beside")\nend')
+    run(arm, DT)
+    assert arm.robot.log[-1] == 'beside' and arm.robot.program_running
+
+
+def test_threads_run_beside_the_program_each_control_cycle(arm):
+    arm.script_command('def p():\n  global n = 0\n  thread count():\n    while True:\n      n = n + 1\n'
+                       '      sync()\n    end\n  end\n  h = run count()\n  sleep(0.1)\n  kill h\n'
+                       '  textmsg("counted ", n)\nend')
+    run_until(arm, lambda: not arm.script_running, 1.0)
+    counted = int(arm.robot.log[-1].split()[-1])
+    assert abs(counted - 0.1 / DT) <= 1  # once per 2 ms cycle
+
+
+def test_force_mode_without_physics_runs_the_compliant_axis_at_its_speed_limit(arm):
+    # Nothing pushes back on the kinematic arm: as in URSim, the tool goes at the limit (tool z points down).
+    start = tool_pose(arm)[:3, 3]
+    arm.script_command('def p():\n  force_mode(get_actual_tcp_pose(), [0, 0, 1, 0, 0, 0], [0, 0, 10, 0, 0, 0], 2, '
+                       '[0.1, 0.1, 0.02, 0.17, 0.17, 0.17])\n  sleep(1)\n  end_force_mode()\nend')
+    run(arm, 0.5)
+    middle = tool_pose(arm)[:3, 3]
+    run(arm, 0.25)
+    speed = (middle - tool_pose(arm)[:3, 3]) / 0.25
+    assert speed[2] == pytest.approx(0.02, rel=0.01)
+    assert np.allclose(speed[:2], 0.0, atol=1e-6) and np.allclose(middle[:2], start[:2], atol=1e-6)
+    assert arm.tcp_force()[0] == pytest.approx(np.zeros(6))
+
+
 def test_the_robot_log_keeps_only_its_latest_entries(arm):
     for i in range(rs.LOG_ENTRIES + 50):
         arm.script_command('sec log():\n  textmsg("line %d %s")\nend' % (i, 'x' * 2000))
