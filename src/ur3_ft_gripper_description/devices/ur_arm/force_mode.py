@@ -34,7 +34,7 @@ import math
 
 import numpy as np
 
-from .arm_kinematics import rotation_matrix, rotation_vector
+from .arm_kinematics import rotation_matrix
 
 # The admittance's virtual mass (kg) and moment of inertia (kg m^2).
 VIRTUAL_MASS = 10.0
@@ -127,7 +127,3 @@ def displaced(pose, linear, angular):
         moved[:3, :3] = rotation_matrix(angular).dot(moved[:3, :3])
     return moved
 
-
-def rotation_between(before, after):
-    """The rotation vector (base axes) that turns 3x3 `before` into `after`."""
-    return rotation_vector(np.asarray(after).dot(np.asarray(before).T))
