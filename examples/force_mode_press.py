@@ -52,17 +52,25 @@ class ForceModePress(object):
         self.rospy.sleep(0.5)
         self.sensor.zero()
 
-    def press(self, force, speed, seconds):
-        """Run the program with `force` (N); the steady readings (dict)."""
+    def press(self, force, speed, seconds, sample=None):
+        """Run the program with `force` (N); the steady readings (dict).
+
+        `sample()`, if given, is called every 20 ms over the second the readings are averaged; its
+        results come back as result['samples'] (a test reads the simulation's own contact force so).
+        """
         self.script.run(PROGRAM.format(force=force, speed=speed, seconds=seconds + 1.0))
         self.rospy.sleep(seconds - MEASURE)
         start = self.rospy.get_time()
-        ft300 = self.sensor.mean(MEASURE)
+        samples = []
+        while sample is not None and self.rospy.get_time() < start + MEASURE:
+            samples.append(sample())
+            self.rospy.sleep(0.02)
+        ft300 = self.sensor.mean_over(start, start + MEASURE)
         robot = clients.mean_wrench(self.script.wrench_since(start, start + MEASURE))
         clients.wait_until(self.rospy, lambda: self.script.program_running is False and
                            self.rospy.get_time() > start + seconds + 3.0, 'the end of the program', 30.0)
         self.script.resume()
-        return dict(force=force, ft300_fz=ft300[2], robot_fz=robot[2], ft300=ft300, robot=robot)
+        return dict(force=force, ft300_fz=ft300[2], robot_fz=robot[2], ft300=ft300, robot=robot, samples=samples)
 
 
 def main(argv=None):

@@ -284,18 +284,21 @@ class FT300(object):
     def mean(self, seconds):
         """The mean wrench over the next `seconds` s."""
         start = self.rospy.get_time()
-        end = start + seconds
+        return self.mean_over(start, start + seconds)
+
+    def mean_over(self, start, end):
+        """The mean wrench stamped from `start` to `end` (s, ROS time), once a later reading arrived."""
         with self._lock:
             stamp = self.readings[-1][0] if self.readings else start
         if abs(stamp - start) > CLOCKS_APART:
             raise CellError('robotiq_ft_wrench is stamped %.0f s away from this node\'s ROS time: run this node '
                             'with the same use_sim_time as the cell' % (stamp - start))
         wait_until(self.rospy, lambda: self.readings and self.readings[-1][0] >= end,
-                   'robotiq_ft_wrench for %g s' % seconds, seconds + 10.0)
+                   'robotiq_ft_wrench for %g s' % (end - start), max(0.0, end - self.rospy.get_time()) + 10.0)
         readings = self.since(start, end)
         if not readings:
-            raise CellError('no robotiq_ft_wrench in %g s' % seconds)
-        return tuple(float(v) for v in np.mean(readings, axis=0))
+            raise CellError('no robotiq_ft_wrench in %g s' % (end - start))
+        return mean_wrench(readings)
 
 
 class UrScript(object):

@@ -6,7 +6,7 @@ rq_sensor, the robot's wrench, joint_states, the dashboard), judged by
 MuJoCo's own contact force (the private link's `truth`) and by the tool's
 path computed from the model:
 
-- examples/force_mode_press.py, as shipped, presses the tool on the table
+- examples/force_mode_press.py's own press (its program, its readings) presses the tool on the table
   with 10, 20 and 40 N: the zeroed FT 300 reads the force within 5 % or
   0.5 N, so does MuJoCo's contact, and the robot's own wrench agrees with the
   FT 300 within 1 N;
@@ -53,28 +53,17 @@ class UrscriptPhysicsTest(unittest.TestCase):
 
     def contact_force(self):
         """(simulated time, MuJoCo's net contact force on the robot)."""
-        time, truth = self.truth_link.truth()
-        return time, np.array(truth['contact_force'])
+        when, truth = self.truth_link.truth()
+        return when, np.array(truth['contact_force'])
 
     def test_1_force_mode_presses_with_the_commanded_force(self):
         seen = []
         for force in FORCES:
             self.press.start(*force_mode_press.START_XY)
-            press = self.press
-            press.script.run(force_mode_press.PROGRAM.format(force=force, speed=0.05, seconds=4.0))
-            rospy.sleep(2.5)
-            # MuJoCo's contact force over the same second as the FT 300's mean: the contact rings a little.
-            start = rospy.get_time()
-            contacts = []
-            while rospy.get_time() < start + 1.0:
-                contacts.append(self.contact_force()[1])
-                rospy.sleep(0.02)
-            ft300 = clients.mean_wrench(press.sensor.since(start, start + 1.0))
-            contact = np.mean(contacts, axis=0)
-            robot = clients.mean_wrench(press.script.wrench_since(start, start + 1.0))
-            rostest_helpers.wait_for(lambda: press.script.program_running is False, 'the program', 60)
-            rospy.sleep(2.5)
-            press.script.resume()
+            # The example's own press, MuJoCo's contact sampled over the same second as its readings.
+            result = self.press.press(force, 0.05, 3.5, sample=lambda: self.contact_force()[1])
+            ft300, robot = result['ft300'], result['robot']
+            contact = np.mean(result['samples'], axis=0)
             seen.append('%g N: FT 300 fz %.2f, robot fz %.2f, contact z %.2f' % (
                 force, ft300[2], robot[2], contact[2]))
             tolerance = max(0.05 * force, 0.5)
