@@ -64,6 +64,8 @@ NOT_RUN_HERE = [
     ('rosrun ur3_ft_gripper_description pick_and_weigh.py', 'needs the cell on physics running: '
                                                            'test/rostest/physics_cell.test runs it'),
     ('rosrun ur3_ft_gripper_description guarded_touch.py', 'the same: test/rostest/physics_cell.test runs it'),
+    ('rosrun ur3_ft_gripper_description force_mode_press.py', 'the same: test/rostest/urscript_physics.test runs '
+                                                             'its press at each force'),
 ]
 RUN_HERE = ('roslaunch ', 'rosrun ur3_ft_gripper_description export_')
 
