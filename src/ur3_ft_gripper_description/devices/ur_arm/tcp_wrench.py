@@ -35,7 +35,7 @@ def mounted_payload(urdf_text, flange):
     What a user enters as the payload of an installation with this tool.
     """
     model = Model(urdf_text)
-    below = [link for link in model.links if link != flange and _descends(model, link, flange)]
+    below = [link for link in model.links if link != flange and _below(model, flange, link)]
     mass, moment = 0.0, np.zeros(3)
     for name in below:
         inertial = model.robot.link_map[name].inertial
@@ -48,12 +48,12 @@ def mounted_payload(urdf_text, flange):
     return mass, tuple(moment / mass) if mass > 0 else (0.0, 0.0, 0.0)
 
 
-def _descends(model, link, ancestor):
-    while link in model.parent_joint:
-        link = model.parent_joint[link].parent
-        if link == ancestor:
-            return True
-    return False
+def _below(model, ancestor, link):
+    try:
+        model.chain(ancestor, link)
+    except ValueError:  # not a descendant
+        return False
+    return True
 
 
 class TcpWrench(object):

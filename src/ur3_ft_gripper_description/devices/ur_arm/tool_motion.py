@@ -558,7 +558,23 @@ class StartSpeedProfile(object):
 
 # -- speedl, stopl, speedj, stopj, servoj ------------------------------------------------------------
 
-class ToolSpeed(Motion):
+class SpeedMotion(Motion):
+    """What speedl and speedj share: their return, after each cycle."""
+
+    def step(self, dt, q=None, qd=None):
+        result = super(SpeedMotion, self).step(dt, q, qd)
+        self._update_returned()
+        return result
+
+    def _update_returned(self):
+        """After t if given (t_min on older software: after t and at speed), else on reaching the speed."""
+        if self.t > 0.0 and not self.minimum_time:
+            self.returned = self.returned or self.elapsed >= self.t - 1e-9
+        else:
+            self.returned = self.returned or (self.reached and self.elapsed >= self.t - 1e-9)
+
+
+class ToolSpeed(SpeedMotion):
     """speedl(xd, a, t, aRot='a'): xd the tool twist (base frame: m/s, then rad/s) to accelerate to."""
 
     name = 'speedl'
@@ -623,22 +639,6 @@ class ToolSpeed(Motion):
                               % ((self.name,) + tuple(pose[:3, 3])))
         return pose, found
 
-    def step(self, dt, q=None, qd=None):
-        result = super(ToolSpeed, self).step(dt, q, qd)
-        self._update_returned()
-        return result
-
-    def _update_returned(self):
-        _speed_returned(self)
-
-
-def _speed_returned(motion):
-    """speedl's and speedj's return: after t if given (t_min on older software: after t and at speed),
-    else on reaching the speed."""
-    if motion.t > 0.0 and not motion.minimum_time:
-        motion.returned = motion.returned or motion.elapsed >= motion.t - 1e-9
-    else:
-        motion.returned = motion.returned or (motion.reached and motion.elapsed >= motion.t - 1e-9)
 
 
 class ToolStop(ToolSpeed):
@@ -654,7 +654,7 @@ class ToolStop(ToolSpeed):
             self.returned = self.done = True
 
 
-class JointSpeed(Motion):
+class JointSpeed(SpeedMotion):
     """speedj(qd, a, t): the joint speeds to accelerate to, a the leading joint's acceleration."""
 
     name = 'speedj'
@@ -685,13 +685,6 @@ class JointSpeed(Motion):
         self.speed, self.reached = speed, self.reached or reached
         return new
 
-    def step(self, dt, q=None, qd=None):
-        result = super(JointSpeed, self).step(dt, q, qd)
-        self._update_returned()
-        return result
-
-    def _update_returned(self):
-        _speed_returned(self)
 
 
 class JointStop(JointSpeed):
