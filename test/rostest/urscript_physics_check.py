@@ -13,10 +13,14 @@ path computed from the model:
 - with x and y compliant too and no force asked there, the tool does not
   drift more than 1 mm/s;
 - a movel keeps the tool within 1 mm of its line and ends within 0.5 mm;
-- a program that does not compile is refused whole: rosout names its line.
+- a program that does not compile is refused whole: rosout names its line;
+- the example as a user runs it (`rosrun ... force_mode_press.py --forces 15`)
+  exits 0 and prints the FT 300's and the robot's readings, in agreement.
 
 The tests run in the order of their names.
 """
+import re
+import subprocess
 import sys
 import time
 import unittest
@@ -122,6 +126,21 @@ class UrscriptPhysicsTest(unittest.TestCase):
         say(text)
         self.assertIn('line 4', text)
         self.assertTrue(self.press.script.program_running)
+
+    def test_5_the_example_runs_as_a_user_runs_it(self):
+        # Its own main, through rosrun, on the same cell: what the README shows.
+        force = 15.0
+        done = subprocess.run(['rosrun', 'ur3_ft_gripper_description', 'force_mode_press.py', '--forces', str(force)],
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True, timeout=300)
+        say(done.stdout.strip().splitlines()[-1] if done.stdout.strip() else '(no output)')
+        self.assertEqual(done.returncode, 0, done.stdout)
+        line = re.search(r'force_mode +([-\d.]+) N: FT 300 fz +([-\d.]+) N, robot wrench fz +([-\d.]+) N',
+                         done.stdout)
+        self.assertIsNotNone(line, done.stdout)
+        asked, ft300, robot = (float(v) for v in line.groups())
+        self.assertEqual(asked, force)
+        self.assertAlmostEqual(-ft300, force, delta=max(0.05 * force, 0.5), msg=line.group(0))
+        self.assertAlmostEqual(robot, ft300, delta=1.0, msg=line.group(0))
 
 
 if __name__ == '__main__':
