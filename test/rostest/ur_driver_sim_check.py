@@ -418,10 +418,16 @@ class RobotTest(DriverTestBase):
         self.assertGreater(arrived - started, 1.0 / 1.05 + 1.05 / 1.4 - 0.05)
         self.assertLess(arrived - started, 1.0 / 1.05 + 1.05 / 1.4 + 0.5)
 
-    def test_movej_through_script_command_then_resend_robot_program(self):
+    def test_a_program_through_script_command_then_resend_robot_program(self):
+        # A program as users send one: a straight tool move up, then a joint move. It replaces External
+        # Control; resend_robot_program (headless mode) brings it back and the controller runs again.
         self.move_to(HOME)
         rostest_helpers.wait_for_subscribers(self.driver.script)
-        self.driver.script.publish(String(data='movej([%s], a=1.4, v=1.05)' % ', '.join('%g' % v for v in AWAY)))
+        self.driver.script.publish(String(data='def up_and_away():\n'
+                                          '  movel(pose_add(get_actual_tcp_pose(), p[0, 0, 0.03, 0, 0, 0]), '
+                                          'a=0.5, v=0.1)\n'
+                                          '  movej([%s], a=1.4, v=1.05)\n'
+                                          'end\n' % ', '.join('%r' % v for v in AWAY)))
         wait_for(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
                    'the script replaces the External Control program')
         wait_for(lambda: np.allclose(arm_positions(self.prefix)[0], AWAY, atol=1e-3), 'movej reaches its target')
