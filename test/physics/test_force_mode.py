@@ -26,7 +26,8 @@ class Pressing(object):
         self.cell, self.period = cell, period
         self.arm = Arm(cell)
         self.arm.hold(0.5)
-        self.robot_wrench = tw.TcpWrench(tw.mounted_payload(cell.urdf_text, 'tool0'))
+        self.robot_wrench = tw.TcpWrench()
+        self.payload = tw.mounted_payload(cell.urdf_text, 'tool0')
         self.q = self.arm.motion.reference.copy()
         self.target = self.arm.kinematics.forward(self.q)
         self.ft_zero = np.array(cell.wrench())
@@ -34,7 +35,7 @@ class Pressing(object):
     def tcp_wrench(self):
         """(base axes, tcp axes): the robot's own wrench now (the TCP at the flange)."""
         now = self.arm.kinematics.forward(self.cell.arm_position)
-        return self.robot_wrench.at_tcp(self.cell.flange_wrench(), now[:3, :3], np.eye(4))
+        return self.robot_wrench.at_tcp(self.cell.flange_wrench(), now[:3, :3], np.eye(4), self.payload)
 
     def run(self, mode, seconds):
         """Step `mode` for `seconds`; [(robot wrench in tcp axes, zeroed FT 300, tool0 position)] per cycle."""
@@ -57,11 +58,11 @@ def mean(rows):
 
 def test_at_rest_the_robots_wrench_with_the_mounted_payload_reads_zero(make_cell):
     pressing = Pressing(make_cell(), 0.008)
-    mass, cog = pressing.robot_wrench.payload
+    mass, cog = pressing.payload
     assert mass == pytest.approx(1.275, abs=0.01)  # FT 300 (0.300) + 2F-140 with coupling, the model's
     assert np.allclose(pressing.tcp_wrench()[0], 0.0, atol=0.02)
     # Without the payload the robot reads the tool's weight, downwards in the base frame.
-    pressing.robot_wrench.payload = (0.0, (0.0, 0.0, 0.0))
+    pressing.payload = (0.0, (0.0, 0.0, 0.0))
     assert pressing.tcp_wrench()[0][2] == pytest.approx(-mass * STANDARD_GRAVITY, rel=0.01)
 
 

@@ -190,7 +190,7 @@ class ArmCore(object):
         self.secondary_runs = []     # urscript.Run of the secondary programs running beside it
         self.held = np.array(motion.position, dtype=float)  # where the arm holds while nothing commands
         self.tcp = np.eye(4)         # the TCP in the flange's frame (set_tcp)
-        self.wrench_model = tcp_wrench.TcpWrench(self.robot.payload)
+        self.wrench_model = tcp_wrench.TcpWrench()
         # The controller_stopper acts on the first cycle too: a robot that starts without
         # its program running starts with the commanding controllers stopped.
         self.last_program_running = True
@@ -217,16 +217,12 @@ class ArmCore(object):
     def _flange(self):
         return self.arm.forward(np.array(self.motion.position, dtype=float))
 
-    def _tcp_wrench_model(self):
-        self.wrench_model.payload = self.robot.payload
-        return self.wrench_model
-
     def tcp_force(self):
         """(base axes, TCP axes): the robot's own external wrench at its TCP (tcp_wrench.py)."""
         flange = self.motion.flange_wrench
         if flange is None:
             return np.zeros(6), np.zeros(6)
-        return self._tcp_wrench_model().at_tcp(flange, self._flange()[:3, :3], self.tcp)
+        return self.wrench_model.at_tcp(flange, self._flange()[:3, :3], self.tcp, self.robot.payload)
 
     def _state(self):
         return np.array(self.motion.position, dtype=float), np.array(self.motion.velocity, dtype=float)
@@ -243,7 +239,7 @@ class ArmCore(object):
         if refusal is not None:
             self._say(ERROR, refusal)
             return False, refusal
-        self._tcp_wrench_model().zero(self.motion.flange_wrench, self._flange()[:3, :3])
+        self.wrench_model.zero(self.motion.flange_wrench, self._flange()[:3, :3], self.robot.payload)
         return True, ''
 
     def dashboard(self, command):
@@ -512,8 +508,10 @@ class ArmCore(object):
         self.robot.script_started(program.secondary)
         if program.secondary:
             run = urscript.Run(program, self.script_robot)
-            self.secondary_runs.append(run)
             self._step_run(run, 0.0)
+            if not run.finished:
+                # One that ended here (done, or its runtime exception said) is not stepped, nor said, again.
+                self.secondary_runs.append(run)
             return
         if self.script_run is not None:
             self.script_run.stop()

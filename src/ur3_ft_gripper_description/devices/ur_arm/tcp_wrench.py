@@ -25,8 +25,7 @@ force-mode programs).
 import numpy as np
 
 from ...kinematics import Model
-
-STANDARD_GRAVITY = 9.80665
+from ..wrench_model import gravity_wrench
 
 
 def mounted_payload(urdf_text, flange):
@@ -57,27 +56,27 @@ def _below(model, ancestor, link):
 
 
 class TcpWrench(object):
-    """The robot's wrench from the flange's; `payload` (mass, cog) as set_payload takes it."""
+    """The robot's wrench from the flange's. `payload` (mass, cog) is the robot's, as set_payload set it,
+    passed on each call: the robot state is its one home."""
 
-    def __init__(self, payload=(0.0, (0.0, 0.0, 0.0))):
-        self.payload = payload
+    def __init__(self):
         self.offset = np.zeros(6)   # zero_ftsensor's, in the flange's axes at the flange
 
-    def _external_at_flange(self, flange_wrench, flange_rotation):
+    def _external_at_flange(self, flange_wrench, flange_rotation, payload):
         """The external wrench on the tool at the flange, in the flange's axes, payload and offset removed."""
-        mass, cog = self.payload
-        weight = flange_rotation.T.dot((0.0, 0.0, -mass * STANDARD_GRAVITY))
-        payload = np.concatenate((weight, np.cross(cog, weight)))
-        return np.asarray(flange_wrench, dtype=float) - payload - self.offset
+        mass, cog = payload
+        down = flange_rotation.T.dot((0.0, 0.0, -1.0))  # gravity's direction in the flange's axes
+        weight = gravity_wrench(down[0], down[1], down[2], mass, cog)
+        return np.asarray(flange_wrench, dtype=float) - np.asarray(weight) - self.offset
 
-    def zero(self, flange_wrench, flange_rotation):
+    def zero(self, flange_wrench, flange_rotation, payload):
         """zero_ftsensor: from now on, the present reading is zero (nothing to zero where nothing is measured)."""
         self.offset = np.zeros(6)
         if flange_wrench is None:
             return
-        self.offset = self._external_at_flange(flange_wrench, flange_rotation)
+        self.offset = self._external_at_flange(flange_wrench, flange_rotation, payload)
 
-    def at_tcp(self, flange_wrench, flange_rotation, tcp):
+    def at_tcp(self, flange_wrench, flange_rotation, tcp, payload):
         """(base axes, tcp axes): the external wrench at the TCP (`tcp`: its 4x4 pose in the flange's frame).
 
         `flange_wrench`: what the tool exerts on the flange (N, N m; flange axes, about its origin), or
@@ -85,7 +84,7 @@ class TcpWrench(object):
         """
         if flange_wrench is None:
             return np.zeros(6), np.zeros(6)
-        external = self._external_at_flange(flange_wrench, flange_rotation)
+        external = self._external_at_flange(flange_wrench, flange_rotation, payload)
         force, torque = external[:3], external[3:]
         # The same force about the TCP: the moment arm runs from the TCP to the flange's origin.
         torque = torque - np.cross(tcp[:3, 3], force)
