@@ -97,7 +97,9 @@ class GripperRegistersTest(unittest.TestCase):
         sent = self.gripper.send(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=150)
         moving = self.gripper.wait_status(lambda s: s.gOBJ == MOVING, since=sent)
         self.assertEqual((moving.gPR, moving.gGTO), (255, 1))
-        closed = self.gripper.wait_status(lambda s: s.gOBJ == AT_REQUESTED_POSITION, since=sent)
+        # A status received after the request may still be one the gripper sent before it took effect
+        # (at the request before): the one at the new request is the first to echo it.
+        closed = self.gripper.wait_status(lambda s: s.gPR == 255 and s.gOBJ == AT_REQUESTED_POSITION, since=sent)
         self.assertEqual((closed.gPR, closed.gPO, closed.gFLT), (255, 230, 0))
         sent = self.gripper.send(rACT=1, rGTO=1, rPR=0, rSP=255, rFR=150)
         opened = self.gripper.wait_status(lambda s: s.gPR == 0 and s.gOBJ == AT_REQUESTED_POSITION, since=sent)

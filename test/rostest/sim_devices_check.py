@@ -321,10 +321,13 @@ class SimDevicesTest(unittest.TestCase):
         self.command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=150))
         self.wait_status(self.gripper_status, lambda s: s.gPO == 230 and s.gOBJ == 3)
         scale = gripper_model.RegisterScale(0.140, 3, 230)  # config/sim_devices.yaml
-        moving = [(r, scale.opening(m.gPO))
-                  for (r, m) in self.gripper_status.items_since(t0) if 20 < m.gPO < 210]
+        # The pads' gap over the finger joint's stamps (ROS time: simulated on the physics cell, whatever
+        # the pace), while it is well inside the stroke.
+        openings = [(m.header.stamp.to_sec(), self.fingers.opening(m.position[0]))
+                    for m in self.gripper_joints.since(t0)]
+        moving = [(t, o) for t, o in openings if scale.opening(210) < o < scale.opening(20)]
         self.assertGreater(len(moving), 10)
-        slope = np.polyfit([r for r, _ in moving], [o for _, o in moving], 1)[0]
+        slope = np.polyfit([t - moving[0][0] for t, _ in moving], [o for _, o in moving], 1)[0]
         self.assertAlmostEqual(slope, -0.250, delta=0.04)  # m/s, the 2F-140's top speed at rSP 255
         joint = self.gripper_joints.next_after(time.monotonic() + 0.1)
         self.assertEqual(joint.name, ['finger_joint'])
