@@ -245,6 +245,10 @@ class ScriptRobot(object):
             # Force mode ended where it brought the arm: from there the program goes on.
             self.force_offset = np.eye(4)
             self.planned = self.commanded.copy()
+            if self.motion is not None and not isinstance(self.motion, tm.Servo):
+                # A move or a stop ended at rest: its last cycle's mean speed is not the arm's speed (a
+                # speedl after a movej would start with it, and turn the tool it was told not to turn).
+                return self.planned, np.zeros(6)
         return self.planned, self.commanded_speed
 
     def _motion(self, build):
