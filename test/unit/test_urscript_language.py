@@ -1,8 +1,9 @@
 """The URScript language package: the scripts users send, compiled and run on simulated time.
 
-The scripts are test/data/urscript/*.script. `CellRobot` below stands for the
-robot side: its `call` records each served call and answers as the arm's
-core does (a value, or a `Blocking` for a move that takes a few cycles).
+The scripts are test/data/urscript/*.script (those in arm/ run on the arm's
+core, in test_urscript_corpus.py). `CellRobot` below stands for the robot
+side: its `call` records each served call and answers as the arm's core does
+(a value, or a `Blocking` for a move that takes a few cycles).
 Each test works out what the script must do on its own (the log lines, the
 calls, the cycle a thread ends in) and compares.
 """
