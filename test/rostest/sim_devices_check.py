@@ -288,6 +288,7 @@ class SimDevicesTest(unittest.TestCase):
 
     def test_stale_pose_stops_the_wrench_until_tf_updates(self):
         self.move_to(ZERO)
+        paused = rospy.get_time()
         self.publishing.clear()
         try:
             time.sleep(1.5)  # ~max_pose_age (0.5 s) plus margin
@@ -295,12 +296,16 @@ class SimDevicesTest(unittest.TestCase):
             time.sleep(1.0)
             self.assertEqual(self.wrench.since(quiet_since), [], 'published for a stale pose')
         finally:
+            resumed = rospy.get_time()
             self.publishing.set()
         # Resumed, and said so: every warning before that message has arrived.
         self.wrench.next_after(time.monotonic())
         rostest_helpers.wait_for_log(self.rosout, '/robotiq_ft_sensor', Log.INFO, 'robotiq_ft_wrench at', quiet_since)
-        warnings = self.warnings_from('/robotiq_ft_sensor', 's old')
-        self.assertEqual(len(warnings), 1, [(m.level, m.msg) for m in self.rosout.since(0)
+        # Once for the pause, by the node's own log stamps: on a busy machine this node's publisher can
+        # starve past the age limit elsewhere too, and the sensor rightly warns then as well.
+        warnings = [m.msg for m in self.rosout.since(0) if m.name == '/robotiq_ft_sensor' and m.level == Log.WARN
+                    and 's old' in m.msg and paused <= m.header.stamp.to_sec() <= resumed]
+        self.assertEqual(len(warnings), 1, [(m.header.stamp.to_sec(), m.level, m.msg) for m in self.rosout.since(0)
                                             if m.name == '/robotiq_ft_sensor'])
 
     # -- gripper_sim and gripper_joint_states ---------------------------------------
