@@ -224,7 +224,8 @@ class ArmCore(object):
             return np.zeros(6), np.zeros(6)
         return self.wrench_model.at_tcp(flange, self._flange()[:3, :3], self.tcp, self.robot.payload)
 
-    def _state(self):
+    def actual_state(self):
+        """(positions, velocities) of the joints now, as copies."""
         return np.array(self.motion.position, dtype=float), np.array(self.motion.velocity, dtype=float)
 
     # -- the hardware interface's services -------------------------------------------------------
@@ -331,14 +332,14 @@ class ArmCore(object):
     def _controller_started(self, name):
         controller = self._trajectory(name)
         if controller is not None:
-            controller.start(self._state()[0])
+            controller.start(self.actual_state()[0])
         self.group_velocity = np.zeros(6)
         self.twist = np.zeros(6)
 
     def _controller_stopped(self, name):
         controller = self._trajectory(name)
         if controller is not None:
-            outcome = controller.stop(*self._state())
+            outcome = controller.stop(*self.actual_state())
             if outcome is not None:
                 self._finish(name, outcome)
         self.group_velocity = np.zeros(6)
@@ -393,7 +394,7 @@ class ArmCore(object):
 
     def _start_goal(self, name, goal_id, joint_names, points, start_delay, path_tolerance=(), goal_tolerance=(),
                     goal_time_tolerance=0.0):
-        position, velocity = self._state()
+        position, velocity = self.actual_state()
         try:
             preempted = self._trajectory(name).accept(goal_id, joint_names, points, start_delay, position, velocity,
                                                       path_tolerance, goal_tolerance, goal_time_tolerance)
@@ -408,13 +409,13 @@ class ArmCore(object):
 
     def cancel_goal(self, name, goal_id):
         """A cancel request: the goal, if it is the active one, stops within stop_trajectory_duration."""
-        outcome = self._trajectory(name).cancel(goal_id, *self._state())
+        outcome = self._trajectory(name).cancel(goal_id, *self.actual_state())
         if outcome is not None:
             self._finish(name, outcome)
 
     def _cancel_active(self, name):
         controller = self._trajectory(name)
-        position, velocity = self._state()
+        position, velocity = self.actual_state()
         if controller.goal is not None:
             self._finish(name, controller.cancel(controller.goal.goal_id, position, velocity))
         else:
@@ -430,7 +431,7 @@ class ArmCore(object):
             return
         controller = self.trajectory_controllers[name]
         if controller.goal is not None and controller.goal.goal_id is not None:
-            self._finish(name, controller.cancel(controller.goal.goal_id, *self._state()))
+            self._finish(name, controller.cancel(controller.goal.goal_id, *self.actual_state()))
         self._start_goal(name, None, joint_names, points, start_delay)
 
     def query_state(self, name, ahead):
@@ -446,7 +447,7 @@ class ArmCore(object):
         """(a GoalReply refusing it, None), or (None, the joints' position the path is planned from)."""
         if not self.manager.controllers[name].running:
             return self.refuse(name, 'INVALID_GOAL', "Can't accept new action goals. Controller is not running."), None
-        return None, self._state()[0]
+        return None, self.actual_state()[0]
 
     def cartesian_points(self, waypoints, start):
         """Joint-space Points along a Cartesian path (cartesian.Waypoint in the base frame); GoalError.
@@ -589,14 +590,14 @@ class ArmCore(object):
         for controller in self.manager.running_commanding():
             trajectory = self._trajectory(controller.name)
             if trajectory is not None:
-                position, velocity, outcomes = trajectory.update(dt, scaling, *self._state())
+                position, velocity, outcomes = trajectory.update(dt, scaling, *self.actual_state())
                 for outcome in outcomes:
                     self._finish(controller.name, outcome)
                 return jm.JointCommand(jm.SERVO, position, velocity), trajectory.limit_factor, False
             if controller.type == VELOCITY_GROUP_TYPE:
                 return jm.JointCommand(jm.VELOCITY, velocity=self.group_velocity * scaling), 1.0, False
             if controller.type == TWIST_TYPE:
-                target = self.twist_follower.step(self._state()[0], self.twist * scaling, dt)
+                target = self.twist_follower.step(self.actual_state()[0], self.twist * scaling, dt)
                 return jm.JointCommand(jm.MOVE, target), 1.0, True
         return self._hold(), 1.0, False
 
@@ -628,7 +629,7 @@ class ArmCore(object):
     def _snapshot(self, limit_factor):
         robot = self.robot
         snapshot = Snapshot()
-        snapshot.position, snapshot.velocity = self._state()
+        snapshot.position, snapshot.velocity = self.actual_state()
         snapshot.effort = np.array(self.motion.effort, dtype=float)
         snapshot.tool_pose = self.arm.forward(snapshot.position).dot(self.tcp)
         snapshot.speed_scaling = robot.speed_scaling() * limit_factor

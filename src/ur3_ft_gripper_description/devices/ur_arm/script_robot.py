@@ -180,7 +180,7 @@ class ScriptRobot(object):
         """A program starts: it commands from where the joints are."""
         self.motion, self.force = None, None
         self.force_offset = np.eye(4)
-        self.commanded = np.array(self.core.motion.position, dtype=float)
+        self.commanded = self.core.actual_state()[0]
         self.planned = self.commanded.copy()
         self.commanded_speed = np.zeros(6)
 
@@ -336,23 +336,20 @@ class ScriptRobot(object):
 
     # state
 
-    def _actual(self):
-        return np.array(self.core.motion.position, dtype=float), np.array(self.core.motion.velocity, dtype=float)
-
     def _get_actual_joint_positions(self):
-        return [float(v) for v in self._actual()[0]]
+        return [float(v) for v in self.core.actual_state()[0]]
 
     def _get_target_joint_positions(self):
         return [float(v) for v in self.commanded]
 
     def _get_actual_joint_speeds(self):
-        return [float(v) for v in self._actual()[1]]
+        return [float(v) for v in self.core.actual_state()[1]]
 
     def _get_target_joint_speeds(self):
         return [float(v) for v in self.commanded_speed]
 
     def _get_actual_tcp_pose(self):
-        return _pose(tm.tcp_pose(self.core.arm, self.core.tcp, self._actual()[0]))
+        return _pose(tm.tcp_pose(self.core.arm, self.core.tcp, self.core.actual_state()[0]))
 
     _tool_pose = _get_actual_tcp_pose
 
@@ -360,14 +357,14 @@ class ScriptRobot(object):
         return _pose(tm.tcp_pose(self.core.arm, self.core.tcp, self.commanded))
 
     def _get_actual_tool_flange_pose(self):
-        return _pose(self.core.arm.forward(self._actual()[0]))
+        return _pose(self.core.arm.forward(self.core.actual_state()[0]))
 
     def _tcp_speed(self, q, qd):
         twist = tm.tcp_jacobian(self.core.arm, self.core.tcp, q).dot(qd)
         return [float(v) for v in twist]
 
     def _get_actual_tcp_speed(self):
-        return self._tcp_speed(*self._actual())
+        return self._tcp_speed(*self.core.actual_state())
 
     def _get_target_tcp_speed(self):
         return self._tcp_speed(self.commanded, self.commanded_speed)
@@ -380,19 +377,19 @@ class ScriptRobot(object):
 
     def _get_inverse_kin(self, x, qnear, maxPositionError, maxOrientationError, tcp):
         offset = self.core.tcp if tcp is None else _matrix(tcp, 'get_inverse_kin: tcp')
-        near = self._actual()[0] if qnear is None else _floats(qnear, 6, 'get_inverse_kin: qnear')
+        near = self.core.actual_state()[0] if qnear is None else _floats(qnear, 6, 'get_inverse_kin: qnear')
         solved = self.core.arm.nearest_inverse(_matrix(x, 'get_inverse_kin: x').dot(rigid_inverse(offset)), near)
         if solved is None:
             raise RuntimeFault('get_inverse_kin: no solution for the pose %s' % to_str(x))
         return [float(v) for v in solved]
 
     def _get_forward_kin(self, q, tcp):
-        joints = self._actual()[0] if q is None else _floats(q, 6, 'get_forward_kin: q')
+        joints = self.core.actual_state()[0] if q is None else _floats(q, 6, 'get_forward_kin: q')
         offset = self.core.tcp if tcp is None else _matrix(tcp, 'get_forward_kin: tcp')
         return _pose(tm.tcp_pose(self.core.arm, offset, joints))
 
     def _is_steady(self):
-        return bool(not self.moving and np.all(np.abs(self._actual()[1]) < STEADY_SPEED))
+        return bool(not self.moving and np.all(np.abs(self.core.actual_state()[1]) < STEADY_SPEED))
 
     # set-up
 
