@@ -515,3 +515,33 @@ def test_the_snapshot_is_what_the_driver_publishes(arm):
     assert ok and 'force_torque_sensor_controller' not in arm.step(DT).reading
     assert arm.set_io(1, 3, 1.0)[0] and arm.step(DT).digital_out[3]
     assert not arm.set_io(1, 40, 1.0)[0] and 'set_io' in arm.take_messages()[-1][1]
+
+
+# -- blends -------------------------------------------------------------------------------------------
+
+def square_program(r):
+    """Three movel around three corners of a 4 cm square in the tool's plane, each blended with `r`."""
+    return ('def square():\n  start = get_actual_tcp_pose()\n'
+            '  movel(pose_add(start, p[0.04, 0, 0, 0, 0, 0]), a=0.5, v=0.1, r=%r)\n'
+            '  movel(pose_add(start, p[0.04, 0.04, 0, 0, 0, 0]), a=0.5, v=0.1, r=%r)\n'
+            '  movel(pose_add(start, p[0, 0.04, 0, 0, 0, 0]), a=0.5, v=0.1)\n'
+            'end' % (r, r))
+
+
+def test_three_blended_moves_run_through_when_their_blends_do_not_overlap(arm):
+    start = tool_pose(arm)[:3, 3]
+    arm.script_command(square_program(0.01))
+    run_until(arm, lambda: not arm.script_running, 10.0)
+    assert arm.robot.program_state == rs.STOPPED
+    assert not [text for level, text in arm.take_messages() if level == arm_core.ERROR]
+    # pose_add moves the TCP in the robot's base frame; the third corner is 4 cm along its y from the start.
+    moved = tool_pose(arm)[:3, 3] - start
+    assert np.linalg.norm(moved) == pytest.approx(0.04, abs=1e-4) and abs(moved[2]) < 1e-4
+
+
+def test_overlapping_blends_stop_the_program_naming_both_radii(arm):
+    # 3 cm at each corner on 4 cm sides: the two blends would overlap, which the robot refuses.
+    arm.script_command(square_program(0.03))
+    run_until(arm, lambda: not arm.script_running, 10.0)
+    errors = [text for level, text in arm.take_messages() if level == arm_core.ERROR]
+    assert errors and 'overlapping blends' in errors[-1] and 'r=0.03' in errors[-1], errors

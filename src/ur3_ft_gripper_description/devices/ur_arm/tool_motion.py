@@ -62,9 +62,11 @@ joint plus joint). The second starts when the first has just its own
 acceleration time left, so with equal a and v the two ramps mirror each other:
 the tool's speed stays within v, continuous, and the path leaves the first
 line and joins the second only within r of the corner (the overlap lasts no
-longer than the first move's remaining part, which began within r). The
-controller's check for overlapping blend radii (the manual's 'Overlapping
-Blends' skip) is not made.
+longer than the first move's remaining part, which began within r). Blends
+may not overlap (the user manual: "Blends cannot overlap"): a move whose own
+r and the previous waypoint's add up to more than the segment between them,
+or that would start while the previous one still blends out of its own
+predecessor, raises MotionError.
 """
 
 import math
@@ -249,6 +251,20 @@ class PathMotion(Motion):
         self.own_time = 0.0  # this move's own clock; it starts when the blend does
         self.delay = 0.0
 
+    def _check_blends(self):
+        """The user manual: "Blends cannot overlap": the blend radius at the previous waypoint (this move's
+        start) and this move's own must fit on the segment between them. Called once the target is known."""
+        if self.previous is None:
+            return
+        if self.previous.previous is not None:
+            raise MotionError('%s: overlapping blends: the previous move is still blending out of the one '
+                              'before it; use smaller blend radii' % self.name)
+        length = float(np.linalg.norm(self.end_pose[:3, 3] - self.start_pose[:3, 3]))
+        if self.r > 0.0 and self.previous.r + self.r > length:
+            raise MotionError('%s: overlapping blends: r=%g at the previous waypoint and r=%g here overlap on '
+                              'the %.3f m between them; make their sum at most that' % (
+                                  self.name, self.previous.r, self.r, length))
+
     def _blend_delay(self):
         """Seconds this move waits while the previous one goes on alone: until the previous has only this
         move's acceleration time left, so that its deceleration and this acceleration overlap exactly."""
@@ -336,6 +352,7 @@ class JointMove(PathMotion):
         self._check_limits(target, 'movej')
         self.end_q = target
         self.end_pose = tcp_pose(arm, self.tcp, target)
+        self._check_blends()
         self.delta = target - self.start_q
         distance = float(np.max(np.abs(self.delta)))
         ratios = np.abs(self.delta) / max(distance, 1e-12)
@@ -379,6 +396,7 @@ class LinearMove(PathMotion):
         if not (a > 0 and v > 0 and t >= 0):
             raise MotionError('%s: a > 0, v > 0 and t >= 0' % self.name)
         self.end_pose = target
+        self._check_blends()
         self._plan(a, v, t)
         self.end_q = self._check_path()
         self._nominal_q = self.start_q.copy()  # this move's own joints, for a blend in joint space
