@@ -13,7 +13,11 @@ pose math, strings, lists, sleep, sync) live here. A function the URScript
 manual has (MANUAL_FUNCTIONS, from manual_functions.txt) that nobody
 implements refuses the script with "is a URScript function the simulated
 robot does not offer"; a name nobody knows with the robot's own wording,
-"name 'x' is not defined".
+"name 'x' is not defined". A script nested deeper than parser.MAX_NESTING
+(100 blocks, brackets, calls or operators inside one another) is refused
+naming the line: the manual sets no limit, Python's stack does. What Python
+cannot compute with (an int too large for a float, a rotation of infinite
+angle) stops the program with a runtime error, as the robot's own errors do.
 
 What a script is: one top-level `def name(): ... end` (a program) or
 `sec name(): ... end` (a secondary program, which may use no physical time:

@@ -55,8 +55,15 @@ def _vector(value, what, size=None):
 
 # --- rotations -----------------------------------------------------------------------
 
+def _finite_rotation(values):
+    if not np.all(np.isfinite(values)):
+        # An infinite or NaN angle (a pose element, alpha) has no rotation; numpy's eigenvectors refuse it.
+        raise RuntimeFault('the rotation is not finite: an angle or a pose element is infinite or NaN')
+    return values
+
+
 def rotvec_to_matrix(rotvec):
-    rotvec = np.asarray(rotvec, dtype=float)
+    rotvec = _finite_rotation(np.asarray(rotvec, dtype=float))
     angle = float(np.linalg.norm(rotvec))
     if angle < 1e-12:
         return np.eye(3)
@@ -64,7 +71,7 @@ def rotvec_to_matrix(rotvec):
 
 
 def matrix_to_rotvec(matrix):
-    axis, angle = axangles.mat2axangle(matrix)
+    axis, angle = axangles.mat2axangle(_finite_rotation(matrix))
     if abs(angle) < 1e-12:
         return np.zeros(3)
     return np.asarray(axis, dtype=float) * angle

@@ -26,6 +26,7 @@ from .values import Pose, RuntimeFault
 
 UNSET = object()
 MAX_DEPTH = 256  # nested calls before the program stops with a stack overflow
+PYTHON_VALUE_ERRORS = (ArithmeticError, TypeError, ValueError)
 
 
 class Blocking(object):
@@ -168,6 +169,10 @@ class Run(object):
             self._fail(fault, thread)
         except RecursionError:
             self._fail(RuntimeFault('Stack overflow'), thread)
+        except PYTHON_VALUE_ERRORS as exc:
+            # What Python says of a value it cannot compute with (an int too large for a float, fmod
+            # of infinity, int() of a list) is the program's runtime error, never the node's.
+            self._fail(_as_fault(exc), thread)
 
     def _run(self, thread):
         """Run one thread until it waits, ends or spends its budget."""

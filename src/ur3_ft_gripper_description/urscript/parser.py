@@ -19,6 +19,15 @@ except ImportError:  # lark-parser 0.8: an early end is an UnexpectedToken on $E
     UnexpectedEOF = ()
 
 
+# Constructs inside one another (blocks, brackets, calls, operators) past which a script is refused: the
+# parser and the compiler recurse on nesting, and Python's stack, shared with the node, must hold them.
+MAX_NESTING = 100
+# The grammar's rules that only group the parts of the construct above them: no nesting of their own.
+_GROUPING = frozenset(['start', 'block', 'elif_clause', 'else_clause', 'params', 'param', 'args', 'arg', 'kwarg',
+                       'exprlist'])
+# Left-associative chains, built as one operation inside the other: each operator is a level.
+_CHAINS = frozenset(['or_expr', 'xor_expr', 'and_expr', 'sum', 'term', 'comparison'])
+
 KEYWORDS = frozenset(['def', 'sec', 'thread', 'end', 'if', 'elif', 'else', 'while', 'return', 'break',
                       'continue', 'halt', 'run', 'join', 'kill', 'local', 'global', 'and', 'or', 'xor',
                       'not', 'True', 'False'])
@@ -105,7 +114,24 @@ def parse(text):
     except UnexpectedEOF:
         last = max(1, len(text.rstrip().splitlines()))
         raise CompileError('unexpected end of script: a bracket or a block is not closed', last, 1)
+    _check_nesting(tree)
     return [_build(child) for child in tree.children]
+
+
+def _check_nesting(tree):
+    """CompileError at the first construct nested deeper than MAX_NESTING (walked without recursion)."""
+    pending = [(tree, 0)]
+    while pending:
+        node, depth = pending.pop()
+        if node.data in _CHAINS:
+            depth += sum(1 for child in node.children if isinstance(child, lark.Tree)) - 1
+        elif node.data not in _GROUPING:
+            depth += 1
+        if depth > MAX_NESTING:
+            line, column = _pos(node)
+            raise CompileError('nested too deeply: more than %d blocks, brackets, calls or operators inside one '
+                               'another' % MAX_NESTING, line, column)
+        pending.extend((child, depth) for child in node.children if isinstance(child, lark.Tree))
 
 
 def _pos(item):
