@@ -214,6 +214,93 @@ def test_two_movep_turn_through_an_arc_inside_r(cell):
     assert np.linalg.norm(points[-1] - end[:3, 3]) < 5e-4
 
 
+def test_a_movel_blend_wider_than_the_stopping_distance_starts_when_the_first_has_its_ramp_left(cell):
+    # r = 0.05 > v^2 / 2a: the first move is still at v on entering r, so the second waits (superposed
+    # earlier, the two speeds add up beyond v and the path leaves the first line outside r).
+    r = 0.05
+    start = cell.tool(START, TCP)
+    corner, end = start.copy(), start.copy()
+    corner[:3, 3] += [0.1, 0.0, 0.0]
+    end[:3, 3] += [0.1, 0.1, 0.0]
+    first = tm.LinearMove(cell.arm, TCP, START, None, corner, r=r)
+    joints, poses, switch, second = blended_run(
+        cell, first, lambda m: tm.LinearMove(cell.arm, TCP, None, None, end, previous=m), START, TCP)
+    points = positions(poses)
+    off_lines = np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
+                           distance_to_segment(points, corner[:3, 3], end[:3, 3])) > 1e-4
+    assert off_lines.any()
+    assert np.all(np.linalg.norm(points[off_lines] - corner[:3, 3], axis=1) <= r + 1e-4)
+    assert np.max(np.linalg.norm(speeds(cell, poses), axis=1)) <= tm.MOVEL_V * 1.02
+    # The first move alone, then both together for its deceleration: the trapezoid's time plus the second's
+    # own time less the overlap of one ramp.
+    took = (len(poses) - 1) * cell.dt
+    alone = trapezoid_time(0.1, tm.MOVEL_V, tm.MOVEL_A)
+    assert abs(took - (2.0 * alone - tm.MOVEL_V / tm.MOVEL_A)) <= 2.5 * cell.dt
+
+
+def test_a_movel_blend_turns_the_tool_continuously_to_the_second_orientation(cell):
+    r = 0.02
+    start = cell.tool(START, TCP)
+    corner = start.dot(rotation_about([0.0, 0.0, 1.0], 0.3))
+    corner[:3, 3] = start[:3, 3] + [0.1, 0.0, 0.0]
+    end = corner.dot(rotation_about([1.0, 0.0, 0.0], 0.3))
+    end[:3, 3] = corner[:3, 3] + [0.0, 0.1, 0.0]
+    first = tm.LinearMove(cell.arm, TCP, START, None, corner, r=r)
+    joints, poses, switch, second = blended_run(
+        cell, first, lambda m: tm.LinearMove(cell.arm, TCP, None, None, end, previous=m), START, TCP)
+    assert math.degrees(angle_between(poses[-1][:3, :3], end[:3, :3])) < 0.1
+    rates = np.array([angle_between(p[:3, :3], n[:3, :3]) / cell.dt for p, n in zip(poses, poses[1:])])
+    # Each move turns 0.3 rad over 0.1 m: 3 rad/s per m/s of the tool, and the blend's two turns share v.
+    assert np.max(rates) <= 3.0 * tm.MOVEL_V * 1.02
+    assert np.max(np.abs(np.diff(rates))) <= 2.0 * 3.0 * tm.MOVEL_A * cell.dt + 1e-3
+
+
+def test_two_movep_at_an_oblique_corner_into_a_faster_move_keep_the_tool_speed_continuous(cell):
+    # A 60 degree turn (an arc's radius is cut / tan(turn / 2); only at 90 degrees is that cut itself), into
+    # a move twice as fast: the arc starts at the speed the tool has, then speeds up at a.
+    r = 0.03
+    start = cell.tool(START, TCP)
+    corner, end = start.copy(), start.copy()
+    corner[:3, 3] += [0.12, 0.0, 0.0]
+    end[:3, 3] = corner[:3, 3] + 0.1 * np.array([math.cos(math.radians(60)), 0.0, -math.sin(math.radians(60))])
+    first = tm.ProcessMove(cell.arm, TCP, START, None, corner, v=0.1, r=r)
+    joints, poses, switch, second = blended_run(
+        cell, first, lambda m: tm.ProcessMove(cell.arm, TCP, None, None, end, v=0.2, previous=m), START, TCP)
+    assert second.arc is not None
+    points = positions(poses)
+    off_lines = np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
+                           distance_to_segment(points, corner[:3, 3], end[:3, 3])) > 1e-3
+    assert off_lines.any()
+    assert np.all(np.linalg.norm(points[off_lines] - corner[:3, 3], axis=1) <= r + 1e-4)
+    velocity = speeds(cell, poses)
+    assert np.max(np.linalg.norm(velocity, axis=1)) <= 0.2 * 1.02
+    # The arc's centripetal acceleration (v^2 / radius, under a here) plus the tangential a.
+    assert np.max(np.linalg.norm(np.diff(velocity, axis=0), axis=1)) <= 2.0 * tm.MOVEP_A * cell.dt + 1e-3
+    assert np.linalg.norm(points[-1] - end[:3, 3]) < 5e-4
+
+
+def test_a_movep_blend_into_a_line_too_short_to_stop_in_at_a_stops_on_target_without_speeding_up(cell):
+    # Turning back by 150 degrees into 22 mm: the arc and that line are shorter than the tool needs to stop
+    # from the speed it enters r with (decelerating at a since 56 mm before the corner: v0^2 / 2a = cut),
+    # so it stops harder than a.
+    a, v, r = 0.2, 0.15, 0.02
+    start = cell.tool(START, TCP)
+    corner, end = start.copy(), start.copy()
+    corner[:3, 3] += [0.12, 0.0, 0.0]
+    end[:3, 3] = corner[:3, 3] + 0.022 * np.array([math.cos(math.radians(150)), math.sin(math.radians(150)), 0.0])
+    first = tm.ProcessMove(cell.arm, TCP, START, None, corner, a=a, v=v, r=r)
+    joints, poses, switch, second = blended_run(
+        cell, first, lambda m: tm.ProcessMove(cell.arm, TCP, None, None, end, a=a, v=v, previous=m), START, TCP)
+    assert second.arc is not None
+    points = positions(poses)
+    entering = float(np.linalg.norm(speeds(cell, poses)[switch - 1]))
+    assert second.path_length < entering ** 2 / (2.0 * a)
+    assert np.max(np.linalg.norm(speeds(cell, poses), axis=1)) <= v * 1.02
+    assert np.max(np.linalg.norm(speeds(cell, poses[switch:]), axis=1)) <= entering * 1.02
+    assert np.linalg.norm(points[-1] - end[:3, 3]) < 5e-4
+    assert second.done
+
+
 # -- speedl, stopl ---------------------------------------------------------------------------------------
 
 def test_speedl_reaches_the_tool_speed_then_stopl_stops_within_v2_over_2a(cell):
@@ -269,6 +356,34 @@ def test_speedl_t_min_of_older_software_waits_for_the_speed(cell):
     assert abs((len(joints) - 1) * cell.dt - 0.5) <= 1.5 * cell.dt
 
 
+def test_speedl_and_stopl_ramp_the_rotation_at_aRot(cell):
+    # Linear 0.05 m/s at a = 0.5 takes 0.1 s, angular 0.4 rad/s at aRot = 0.8 takes 0.5 s: both arrive
+    # together, at the later; stopl's aRot = 2.0 makes the rotation's 0.2 s the later there.
+    xd = np.array([0.05, 0.0, 0.0, 0.0, 0.0, 0.4])
+    motion = tm.ToolSpeed(cell.arm, TCP, START, None, xd, 0.5, aRot=0.8)
+    joints, poses = run(cell, motion, START, until='returned', tcp=TCP)
+    assert abs((len(poses) - 1) * cell.dt - 0.5) <= 1.5 * cell.dt
+    stop = tm.ToolStop(cell.arm, TCP, None, None, 0.5, aRot=2.0, previous=motion)
+    stop_joints, stop_poses = run(cell, stop, joints[-1], tcp=TCP)
+    assert abs((len(stop_poses) - 1) * cell.dt - 0.2) <= 1.5 * cell.dt
+    # Decelerating uniformly from 0.4 rad/s over 0.2 s: 0.04 rad.
+    assert abs(angle_between(stop_poses[0][:3, :3], stop_poses[-1][:3, :3]) - 0.04) < 0.02 * 0.04 + 1e-4
+
+
+def test_speedl_beyond_the_joints_speed_limits_with_a_turn_scales_both_parts_alike(cell):
+    xd = np.array([0.0, 0.0, -3.0, 0.0, 0.0, 1.0])
+    motion = tm.ToolSpeed(cell.arm, None, START, None, xd, 20.0)
+    joints, poses = [START], [cell.tool(START)]
+    for _ in range(int(0.2 / cell.dt)):
+        joints.append(motion.step(cell.dt, joints[-1], None))
+        poses.append(cell.tool(joints[-1]))
+    assert np.all(np.abs(np.diff(np.array(joints), axis=0)) / cell.dt <= cell.arm.velocity * (1.0 + 1e-3))
+    linear = speeds(cell, poses)[-1][2]
+    turn = pose_from_ur_pose([0, 0, 0] + list(tm.ur_pose_of(poses[-1].dot(np.linalg.inv(poses[-2])))[3:]))
+    angular = tm.ur_pose_of(turn)[5] / cell.dt
+    assert linear < -0.1 and abs(angular / linear - xd[5] / xd[2]) < 0.02 * abs(xd[5] / xd[2])
+
+
 # -- speedj, stopj, servoj -----------------------------------------------------------------------------
 
 def test_speedj_then_stopj(cell):
@@ -304,6 +419,61 @@ def test_servoj_follows_with_its_lookahead_time(cell):
     assert np.allclose(q - START, 0.05 * (1.0 - math.exp(-steps * cell.dt / tm.SERVOJ_LOOKAHEAD_TIME)), rtol=1e-6)
 
 
+def test_speedj_ramps_the_joints_together_at_the_leading_joints_a(cell):
+    qd = np.array([0.2, -0.1, 0.0, 0.0, 0.0, 0.3])
+    motion = tm.JointSpeed(cell.arm, START, None, qd, 1.0)
+    joints, _ = run(cell, motion, START, until='returned')
+    assert abs((len(joints) - 1) * cell.dt - 0.3 / 1.0) <= 1.5 * cell.dt  # the leading joint: 0.3 rad/s at 1
+    # Every cycle's joint speeds in proportion to qd: all joints reach their speeds together.
+    for speed in np.diff(np.array(joints), axis=0) / cell.dt:
+        assert np.allclose(speed, qd * (speed[5] / qd[5]), atol=1e-9)
+
+
+def test_speedj_beyond_the_joints_speed_limits_is_scaled_down_in_the_same_direction(cell):
+    qd = np.array([6.0, 0.0, 0.0, 0.0, 0.0, -9.0])
+    motion = tm.JointSpeed(cell.arm, START, None, qd, 40.0, t=0.4)
+    joints, _ = run(cell, motion, START, until='returned')
+    joint_speeds = np.diff(np.array(joints), axis=0) / cell.dt
+    assert np.all(np.abs(joint_speeds) <= cell.arm.velocity * (1.0 + 1e-9))
+    last = joint_speeds[-1]
+    assert np.isclose(np.max(np.abs(last) / cell.arm.velocity), 1.0)  # as fast as the tightest joint goes
+    assert np.allclose(last, qd * (last[0] / qd[0]), atol=1e-9)
+
+
+def test_servoj_follows_with_the_lookahead_time_given(cell):
+    target = START + 0.05
+    q, motion = START, None
+    steps = int(round(0.1 / cell.dt))
+    for _ in range(steps):
+        motion = tm.Servo(cell.arm, q, None, target, t=cell.dt, lookahead_time=0.04, previous=motion)
+        q = motion.step(cell.dt, q, None)
+    assert np.allclose(q - START, 0.05 * (1.0 - math.exp(-steps * cell.dt / 0.04)), rtol=1e-6)
+
+
+def test_servoj_returns_after_its_t(cell):
+    motion = tm.Servo(cell.arm, START, None, START + 0.05, t=0.05)
+    joints, _ = run(cell, motion, START, until='returned')
+    assert abs((len(joints) - 1) * cell.dt - 0.05) <= 1.5 * cell.dt
+    assert motion.done
+
+
+def test_servoj_beyond_the_joint_limits_is_refused_with_one_line(cell):
+    target = START.copy()
+    target[2] = cell.arm.upper[2] + 0.2
+    with pytest.raises(tm.MotionError) as error:
+        tm.Servo(cell.arm, START, None, target)
+    assert '\n' not in str(error.value) and 'limit' in str(error.value)
+
+
+def test_servoj_to_a_far_target_stays_within_the_joints_speed_limits(cell):
+    target = START + np.array([1.0, -0.8, 0.8, 1.0, -1.0, 1.0])
+    motion = tm.Servo(cell.arm, START, None, target, t=0.2)
+    joints, _ = run(cell, motion, START)
+    joint_speeds = np.abs(np.diff(np.array(joints), axis=0)) / cell.dt
+    assert np.all(joint_speeds <= cell.arm.velocity * (1.0 + 1e-9))
+    assert np.isclose(np.max(joint_speeds[0] / cell.arm.velocity), 1.0)  # the lag asks for more at first
+
+
 # -- movej ---------------------------------------------------------------------------------------------
 
 def test_movej_ends_on_target_in_the_trapezoid_time(cell):
@@ -323,6 +493,22 @@ def test_movej_with_t_takes_t(cell):
     motion = tm.JointMove(cell.arm, START, None, target, t=4.0)
     joints, _ = run(cell, motion, START)
     assert abs((len(joints) - 1) * cell.dt - 4.0) <= 1.5 * cell.dt
+    assert np.max(np.abs(joints[-1] - target)) < 1e-12
+
+
+def test_movej_with_t_shorter_than_its_profile_takes_t_within_the_joints_speed_limits(cell):
+    # 0.3 rad at the default a: a triangle of 2 sqrt(d / a) = 0.93 s, peak sqrt(d a). Squeezed into 0.5 s it
+    # takes 0.5 s; into 0.05 s it would need 12 rad/s: the joint's limit wins, and no triangle under it
+    # covers 0.3 rad in less than 2 d / limit.
+    target = START + np.array([0.3, 0.0, 0.0, 0.0, 0.0, 0.0])
+    motion = tm.JointMove(cell.arm, START, None, target, t=0.5)
+    joints, _ = run(cell, motion, START)
+    assert abs((len(joints) - 1) * cell.dt - 0.5) <= 1.5 * cell.dt
+    motion = tm.JointMove(cell.arm, START, None, target, t=0.05)
+    joints, _ = run(cell, motion, START)
+    limit = cell.arm.velocity[0]
+    assert (len(joints) - 1) * cell.dt >= 2.0 * 0.3 / limit - 1.5 * cell.dt
+    assert np.max(np.abs(np.diff(np.array(joints), axis=0)) / cell.dt) <= limit * (1.0 + 1e-9)
     assert np.max(np.abs(joints[-1] - target)) < 1e-12
 
 
