@@ -545,3 +545,26 @@ def test_overlapping_blends_stop_the_program_naming_both_radii(arm):
     run_until(arm, lambda: not arm.script_running, 10.0)
     errors = [text for level, text in arm.take_messages() if level == arm_core.ERROR]
     assert errors and 'overlapping blends' in errors[-1] and 'r=0.03' in errors[-1], errors
+
+
+def test_the_dashboards_stop_ends_a_program_and_play_starts_external_control_not_it(arm):
+    arm.script_command('def p():\n  movel(pose_add(get_actual_tcp_pose(), p[0, 0, 0.1, 0, 0, 0]), a=0.5, v=0.02)\nend')
+    run(arm, 0.5)
+    assert arm.script_running
+    assert arm.dashboard('stop') == 'Stopped'
+    run(arm, DT)
+    stopped_at = np.array(arm.motion.position)
+    assert not arm.script_running and arm.robot.program_state == rs.STOPPED
+    assert arm.dashboard('play').startswith('Starting program')
+    run(arm, 0.5)
+    assert arm.robot.program_running
+    # External Control holds where the program was stopped: the program does not move the arm any more.
+    assert np.allclose(arm.motion.position, stopped_at, atol=1e-6)
+
+
+def test_a_motion_that_fails_while_moving_names_the_line_of_its_call(arm):
+    # speedj on into the shoulder's position limit: the robot stops, and its runtime error names the call.
+    arm.script_command('def p():\n  textmsg("going")\n  speedj([3.0, 0, 0, 0, 0, 0], 5, 10)\nend')
+    run_until(arm, lambda: not arm.script_running, 10.0)
+    errors = [text for level, text in arm.take_messages() if level == arm_core.ERROR]
+    assert errors and 'position limit' in errors[-1] and 'line 3, column 3' in errors[-1], errors

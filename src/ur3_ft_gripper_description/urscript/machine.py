@@ -88,12 +88,20 @@ class Run(object):
         self.instructions = 0  # executed so far, for benchmarks
 
     @property
-    def running_line(self):
-        """The line main is on (the call it waits in), or None when finished."""
+    def running_position(self):
+        """(line, column) main is on (the call it waits in: a motion's runtime error names it), or None
+        when finished."""
         if self.finished or not self.main.frames:
             return None
         frame = self.main.frames[-1]
-        return frame.code.lines[min(frame.pc, len(frame.code.lines) - 1)]
+        at = min(frame.pc, len(frame.code.lines) - 1)
+        return frame.code.lines[at], frame.code.columns[at]
+
+    @property
+    def running_line(self):
+        """The line main is on, or None when finished."""
+        position = self.running_position
+        return None if position is None else position[0]
 
     def stop(self):
         """End the program at once, as a stop or a replacing program does."""

@@ -551,6 +551,10 @@ class ArmCore(object):
     def _script_command(self, dt):
         """This cycle's JointCommand of the primary program; its end makes the program stop."""
         run = self.script_run
+        if self.robot.program_state == rs.STOPPED:
+            # The dashboard's stop (or power off) ended it: a later play starts the loaded program, not this.
+            self._end_script()
+            return self._hold()
         if not self.robot.moving_allowed:
             # Paused (or protectively stopped): the program waits where it is.
             return self._hold()
@@ -563,6 +567,8 @@ class ArmCore(object):
         try:
             position = self.script_robot.command(dt)
         except urscript.RuntimeFault as exc:
+            if not exc.line and run.running_position is not None:
+                exc.line, exc.column = run.running_position
             run.stop()
             self._runtime_exception(exc)
             self._end_script()
