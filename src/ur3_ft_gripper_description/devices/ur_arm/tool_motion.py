@@ -360,8 +360,9 @@ class JointMove(PathMotion):
         cap = min([float(limit) / ratio for limit, ratio in zip(arm.velocity, ratios) if ratio > 1e-9] or [v])
         self.profile = Profile(distance, min(v, cap), a, t)
         if self.profile.peak > cap * (1.0 + 1e-9):
-            # t asked for more speed than a joint has: as fast as the joints go.
-            self.profile = Profile(distance, min(v, cap), a, self.profile.natural * self.profile.peak / cap)
+            # t asked for more speed than a joint has: as fast as the joints go, the natural profile
+            # squeezed until its peak is the cap.
+            self.profile = Profile(distance, min(v, cap), a, self.profile.natural * self.profile.v / cap)
         self.total_time = self.profile.total
 
     def ramp_time(self):
