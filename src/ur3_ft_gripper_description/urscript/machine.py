@@ -10,7 +10,8 @@ instruction budget.
 The budget is the manual's thread scheduling: a thread that computes for a
 whole frame without using physical time (a loop without sync or sleep) is
 put aside until the next frame, so it goes on there and others get their
-turn; `step` always returns after at most `budget` instructions per thread.
+turn; `step` always returns after at most `budget` instructions per thread,
+a call to the robot counting for ROBOT_CALL_COST of them.
 A secondary program must finish within one step: past its budget it stops
 with the error the robot gives ("Runtime is too much behind").
 
@@ -26,6 +27,7 @@ from .values import Pose, RuntimeFault
 
 UNSET = object()
 MAX_DEPTH = 256  # nested calls before the program stops with a stack overflow
+ROBOT_CALL_COST = 100  # instructions of the budget a robot call uses beside its own
 PYTHON_VALUE_ERRORS = (ArithmeticError, TypeError, ValueError)
 
 
@@ -306,6 +308,9 @@ class Run(object):
                     container = values.index(container, i)
                 values.store_index(container, indices[-1], value)
             elif op == C.CALL_ROBOT:
+                # A call to the robot (IO, the log, its state) costs what ROBOT_CALL_COST instructions do:
+                # a loop of textmsg without sync() writes at most budget / cost lines a frame.
+                left -= ROBOT_CALL_COST
                 name, npositional, kwnames = arg
                 given = _take(stack, npositional + len(kwnames))
                 positional = [values.copy(v) for v in given[:npositional]]
