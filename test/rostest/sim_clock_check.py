@@ -8,6 +8,13 @@ with it; joint_state_controller one joint state per control period; the
 2F-140 one status per 20 ms. The real-time factor the arm's node reports is
 checked against what /clock and this process's wall clock show over the
 same window.
+
+Throughout the window, bad programs arrive on script_command: seeded mutants
+of the URScript corpus (ur3_ft_gripper_testing.urscript_mutants), one every
+50 ms of simulated time, as a buggy generator would send them. Every joint
+state must still come, one per period: a bad program never stops the node.
+After them a program still runs, and the node refused the ones that do not
+compile, each on one line.
 """
 import threading
 import time
@@ -19,9 +26,12 @@ from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import WrenchStamped
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input
 from rosgraph_msgs.msg import Clock
+from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import JointState
+from std_msgs.msg import String
 
-from ur3_ft_gripper_testing import rostest_helpers
+from ur3_ft_gripper_testing import rostest_helpers, urscript_mutants
+from ur3_ft_gripper_testing.ur_driver import HW
 
 # Ten simulated seconds of each stream, counted from a start well after the cell came up.
 SPAN = 10.0
@@ -32,6 +42,39 @@ GRIPPER_EDGES = 10     # statuses: 0.2 s of lag at the window's edges
 REPORTS = 5
 # Stamps are whole nanoseconds: two readings a period apart differ by it to within a nanosecond.
 STAMP_TOLERANCE = 2e-9
+# Bad programs sent through the window: one per BAD_PROGRAM_PERIOD simulated seconds.
+BAD_PROGRAM_SEED = 7
+BAD_PROGRAM_PERIOD = 0.05
+ARM_NODE = '/ur_hardware_interface'
+
+
+def primary_mutants(count):
+    """`count` seeded mutants that are primary programs (or bare statements): each replaces the last, as on
+    the robot. Secondary ones would pile up beside it, which is a different test."""
+    programs = [(name, text) for name, text in urscript_mutants.corpus() if not text.lstrip().startswith('sec')]
+    made = urscript_mutants.mutants(BAD_PROGRAM_SEED, 3 * count, programs, urscript_mutants.function_names())
+    return [text for _, text in made if not text.lstrip().startswith('sec')][:count]
+
+
+class BadPrograms(object):
+    """Sends mutants on script_command, one every BAD_PROGRAM_PERIOD of simulated time from `start` to `end`."""
+
+    def __init__(self, start, end):
+        self.publisher = rospy.Publisher(HW + 'script_command', String, queue_size=100)
+        rostest_helpers.wait_for_subscribers(self.publisher)
+        self.programs = primary_mutants(int(round((end - start) / BAD_PROGRAM_PERIOD)))
+        self.sent = 0
+        self.start = start
+        self.thread = threading.Thread(target=self._send, daemon=True)
+        self.thread.start()
+
+    def _send(self):
+        for index, text in enumerate(self.programs):
+            when = self.start + index * BAD_PROGRAM_PERIOD
+            while rospy.get_time() < when and not rospy.is_shutdown():
+                time.sleep(0.002)
+            self.publisher.publish(String(data=text))
+            self.sent += 1
 
 
 class Streams(object):
@@ -93,6 +136,8 @@ class SimClockTest(unittest.TestCase):
         cls.start_ns = (int(rospy.get_time() * 1e9) // grid + 25) * grid
         cls.end_ns = cls.start_ns + int(SPAN * 1e9)
         cls.start, cls.end = cls.start_ns * 1e-9, cls.end_ns * 1e-9
+        cls.rosout = rostest_helpers.Recorder('/rosout', Log)
+        cls.bad_programs = BadPrograms(cls.start, cls.end)
         # Waits on simulated time: the window is over when /clock has passed its end by a second.
         rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + 1.0, 'the end of the window on /clock',
                                  timeout=rostest_helpers.TIMEOUT + 60)
@@ -142,6 +187,19 @@ class SimClockTest(unittest.TestCase):
         self.assertGreaterEqual(checked, REPORTS, 'diagnostics with a whole window of /clock beside them')
         rospy.loginfo('sim_clock_check: /clock ran at %.2f x the wall clock (real_time_factor 0, %g Hz)'
                       % (measured, self.loop_hz))
+
+    def test_after_the_bad_programs_a_program_runs_and_each_refusal_was_one_line(self):
+        self.bad_programs.thread.join(rostest_helpers.TIMEOUT)
+        self.assertEqual(self.bad_programs.sent, len(self.bad_programs.programs))
+        # A secondary program: it runs even where a mutant left the arm protectively stopped.
+        since = time.monotonic()
+        self.bad_programs.publisher.publish(String(data='sec after():\n  textmsg("after the bad programs")\nend'))
+        rostest_helpers.wait_for_log(self.rosout, ARM_NODE, Log.INFO, 'robot log: after the bad programs',
+                                     since=since)
+        refusals = rostest_helpers.logs(self.rosout, ARM_NODE, Log.ERROR, 'would not compile')
+        self.assertGreater(len(refusals), 0)
+        self.assertTrue(all('\n' not in text and 'line ' in text for text in refusals), refusals)
+        rospy.loginfo('sim_clock_check: %d bad programs sent, %d refused' % (self.bad_programs.sent, len(refusals)))
 
 
 if __name__ == '__main__':
