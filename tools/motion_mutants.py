@@ -30,7 +30,8 @@ import sys
 import tempfile
 import time
 
-PKG_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+# The real path: pytest 4.6 (Noetic's) names tests wrongly when given them through the workspace's symlink.
+PKG_DIR = os.path.dirname(os.path.dirname(os.path.realpath(__file__)))
 MODULE = os.path.join('ur3_ft_gripper_description', 'devices', 'ur_arm', 'tool_motion.py')
 TESTS = [os.path.join(PKG_DIR, 'test', 'unit', 'test_tool_motion.py'),
          os.path.join(PKG_DIR, 'test', 'unit', 'test_ur_arm_core.py')]
@@ -208,7 +209,8 @@ def imported_from(src):
 
 def pytest_command(*args):
     # --rootdir: node ids relative to the package whatever the folder the tests run from.
-    return [sys.executable, '-m', 'pytest', '-q', '-p', 'no:cacheprovider', '--rootdir', PKG_DIR] + list(args)
+    # -rf: the short summary names the failed test in every pytest (4.6 on Noetic prints none without it).
+    return [sys.executable, '-m', 'pytest', '-q', '-rf', '-p', 'no:cacheprovider', '--rootdir', PKG_DIR] + list(args)
 
 
 def collect(src):
