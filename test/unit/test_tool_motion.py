@@ -76,6 +76,12 @@ def distance_to_segment(points, a, b):
     return np.linalg.norm(points - (a + along[:, None] * direction), axis=1)
 
 
+def off_the_lines(points, start, corner, end, tolerance):
+    """Which points are further than `tolerance` from both lines, start -> corner and corner -> end (4x4 poses)."""
+    return np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
+                      distance_to_segment(points, corner[:3, 3], end[:3, 3])) > tolerance
+
+
 def angle_between(r1, r2):
     return math.acos(max(-1.0, min(1.0, (np.trace(r1.T.dot(r2)) - 1.0) / 2.0)))
 
@@ -167,8 +173,7 @@ def test_two_movel_blend_within_r_of_the_corner_with_continuous_speed(cell):
     points = positions(poses)
     assert np.linalg.norm(points[switch] - corner[:3, 3]) <= r + 1e-9  # returned within r
     assert not np.linalg.norm(points[switch - 1] - corner[:3, 3]) <= r  # ... on entering it
-    off_lines = np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
-                           distance_to_segment(points, corner[:3, 3], end[:3, 3])) > 1e-3
+    off_lines = off_the_lines(points, start, corner, end, 1e-3)
     assert off_lines.any()  # a blend, not a stop at the corner
     assert np.all(np.linalg.norm(points[off_lines] - corner[:3, 3], axis=1) <= r + 1e-4)
     assert np.min(np.linalg.norm(points - corner[:3, 3], axis=1)) > 1e-3  # the corner is cut
@@ -204,8 +209,7 @@ def test_two_movep_turn_through_an_arc_inside_r(cell):
         cell, first, lambda m: tm.ProcessMove(cell.arm, TCP, None, None, end, v=0.15, previous=m), START, TCP)
     assert second.arc is not None
     points = positions(poses)
-    off_lines = np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
-                           distance_to_segment(points, corner[:3, 3], end[:3, 3])) > 1e-3
+    off_lines = off_the_lines(points, start, corner, end, 1e-3)
     assert off_lines.any()
     assert np.all(np.linalg.norm(points[off_lines] - corner[:3, 3], axis=1) <= r + 1e-4)
     # Constant tool speed through the arc (v = 0.15 is reached before the blend: r > v^2 / 2a).
@@ -226,8 +230,7 @@ def test_a_movel_blend_wider_than_the_stopping_distance_starts_when_the_first_ha
     joints, poses, switch, second = blended_run(
         cell, first, lambda m: tm.LinearMove(cell.arm, TCP, None, None, end, previous=m), START, TCP)
     points = positions(poses)
-    off_lines = np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
-                           distance_to_segment(points, corner[:3, 3], end[:3, 3])) > 1e-4
+    off_lines = off_the_lines(points, start, corner, end, 1e-4)
     assert off_lines.any()
     assert np.all(np.linalg.norm(points[off_lines] - corner[:3, 3], axis=1) <= r + 1e-4)
     assert np.max(np.linalg.norm(speeds(cell, poses), axis=1)) <= tm.MOVEL_V * 1.02
@@ -268,8 +271,7 @@ def test_two_movep_at_an_oblique_corner_into_a_faster_move_keep_the_tool_speed_c
         cell, first, lambda m: tm.ProcessMove(cell.arm, TCP, None, None, end, v=0.2, previous=m), START, TCP)
     assert second.arc is not None
     points = positions(poses)
-    off_lines = np.minimum(distance_to_segment(points, start[:3, 3], corner[:3, 3]),
-                           distance_to_segment(points, corner[:3, 3], end[:3, 3])) > 1e-3
+    off_lines = off_the_lines(points, start, corner, end, 1e-3)
     assert off_lines.any()
     assert np.all(np.linalg.norm(points[off_lines] - corner[:3, 3], axis=1) <= r + 1e-4)
     velocity = speeds(cell, poses)

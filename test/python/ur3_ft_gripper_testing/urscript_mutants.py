@@ -162,8 +162,8 @@ class Mutator(object):
                     return lines[:at] + [untokens(items)] + lines[at + 1:]
         return self._replace_token(lines, ('name',), lambda text: '%s[%s]' % (text, self.rng.choice(INDEXES)))
 
-    def rename_function(self, lines, names):
-        """A call calls another function of the manual (offered by the simulation or not)."""
+    def _a_call(self, lines):
+        """(line index, its tokens, the index of a function name called there) chosen at random, or None."""
         at = self._line(lines, ('name',))
         if at is None:
             return None
@@ -171,19 +171,22 @@ class Mutator(object):
         calls = [i for i in significant(items, ('name',)) if _next_significant(items, i) == '(']
         if not calls:
             return None
-        i = self.rng.choice(calls)
+        return at, items, self.rng.choice(calls)
+
+    def rename_function(self, lines, names):
+        """A call calls another function of the manual (offered by the simulation or not)."""
+        found = self._a_call(lines)
+        if found is None:
+            return None
+        at, items, i = found
         items[i] = ('name', self.rng.choice(self.functions))
         return lines[:at] + [untokens(items)] + lines[at + 1:]
 
     def wrong_argument_count(self, lines, names):
-        at = self._line(lines, ('name',))
-        if at is None:
+        found = self._a_call(lines)
+        if found is None:
             return None
-        items = tokens(lines[at])
-        calls = [i for i in significant(items, ('name',)) if _next_significant(items, i) == '(']
-        if not calls:
-            return None
-        i = self.rng.choice(calls)
+        at, items, i = found
         open_at = significant(items[i + 1:])[0] + i + 1
         close = _matching(items, open_at)
         if close is None:
