@@ -137,7 +137,7 @@ def run_jobs(jobs, results, args, stream):
                 seen[path] = os.stat(path).st_mtime
                 skipped = len(counted.skipped)
                 for label in counted.add_file(path, os.path.join(args.label, where)):
-                    progress.say('FAILED  ' + label)
+                    progress.say(counted.failed_line(label))
                 for label in counted.skipped[skipped:]:
                     progress.say('SKIPPED ' + label)
     progress.status('[tests] %s: %d passed, %d failed%s, %s' % (

@@ -18,11 +18,35 @@ def cases(path):
             yield case
 
 
+def failure_reason(case, width=300):
+    """The one line that says why `case` failed.
+
+    pytest puts it in the message attribute; rosunit leaves that out and puts
+    the assertion first, before the traceback; a bare traceback ends with it.
+    """
+    found = case.find('failure')
+    if found is None:
+        found = case.find('error')
+    if found is None:
+        return ''
+    lines = [line.strip() for line in (found.text or '').splitlines() if line.strip()]
+    reason = (found.get('message') or '').strip()
+    if not reason and lines:
+        reason = lines[-1] if lines[0].startswith('Traceback') else lines[0]
+    reason = ' '.join((reason or found.get('type') or '').split())
+    return reason if len(reason) <= width else reason[:width - 3] + '...'
+
+
 class Tally(object):
-    """Passed count, failed and skipped labels ('<file>: <test>'), added file by file."""
+    """Passed count, failed and skipped labels ('<file>: <test>'), added file by file.
+
+    `reasons` maps a failed label to the line saying why, so a CI log that keeps
+    nothing else still shows what went wrong.
+    """
 
     def __init__(self):
         self.passed, self.failed, self.skipped = 0, [], []
+        self.reasons = {}
 
     def add_file(self, path, where):
         """Count the result file `path`, labelled `where`; returns the labels of its failures."""
@@ -37,12 +61,18 @@ class Tally(object):
             label = '%s: %s' % (where, case.get('name'))
             if case.find('failure') is not None or case.find('error') is not None:
                 failed.append(label)
+                self.reasons[label] = failure_reason(case)
             elif case.find('skipped') is not None:
                 self.skipped.append(label)
             else:
                 self.passed += 1
         self.failed += failed
         return failed
+
+    def failed_line(self, label):
+        """'FAILED  <label>', and on the next line why, when the result says."""
+        reason = self.reasons.get(label)
+        return 'FAILED  %s\n        %s' % (label, reason) if reason else 'FAILED  ' + label
 
     def line(self):
         """The closing line CI reads: 'tests: N passed, N failed[, N skipped]'."""
@@ -70,7 +100,7 @@ def tally(results_dir):
 def main(results_dir):
     counted = tally(results_dir)
     for label in counted.failed:
-        print('FAILED  ' + label)
+        print(counted.failed_line(label))
     for label in counted.skipped:
         print('SKIPPED ' + label)
     print(counted.line())

@@ -19,8 +19,12 @@ TEST_SUMMARY = os.path.join(PKG_DIR, 'tools', 'test_summary.py')
 CI_LINE = re.compile(r'tests: [0-9]+ passed, [0-9]+ failed')
 
 PASSING = '<testsuite name="a"><testcase name="test_one"/><testcase name="test_two"/></testsuite>'
+# As rosunit writes a failure: the assertion first, then the traceback.
 FAILING = ('<testsuite name="b"><testcase name="test_fine"/>'
-           '<testcase name="test_broken"><failure message="no">no</failure></testcase></testsuite>')
+           '<testcase name="test_broken"><failure type="AssertionError">19.1 != 20.0 within 0.5 delta&#10;'
+           '  File "check.py", line 7, in test_broken&#10;    self.assertAlmostEqual(fz, 20.0, delta=0.5)'
+           '</failure></testcase></testsuite>')
+WHY = '        19.1 != 20.0 within 0.5 delta'  # the failure's reason, under its FAILED line
 MAKEFILE = '''\
 RESULTS = test_results/pkg
 help:
@@ -66,6 +70,7 @@ def test_plain_output_names_each_file_as_it_starts_and_each_failure_before_the_n
         '[tests] variant 1/3 pytest unit: 0 failed so far',
         '[tests] variant 2/3 rostest broken.test: 0 failed so far',
         'FAILED  variant/rostest-broken.xml: test_broken',
+        WHY,
         '[tests] variant 3/3 rostest slow.test: 1 failed so far',
         '[tests] variant: 5 passed, 1 failed',
     ], run.stderr
@@ -98,7 +103,7 @@ def test_on_a_terminal_one_line_updates_in_place_and_a_failure_gets_its_own_line
     screens = text.split('\r')
     slow = [s for s in screens if s.startswith('[tests] variant 3/3 rostest slow.test')]
     assert len(slow) >= 2, 'the line of a running file is redrawn while it runs (elapsed time): %r' % text
-    assert '\r\x1b[KFAILED  variant/rostest-broken.xml: test_broken\n' in text.replace('\r\n', '\n'), text
+    assert '\r\x1b[KFAILED  variant/rostest-broken.xml: test_broken\n%s\n' % WHY in text.replace('\r\n', '\n'), text
     assert text.replace('\r\n', '\n').endswith('\n'), 'the last status line is ended, the next output starts clean'
 
 
@@ -124,7 +129,8 @@ def test_a_command_job_reports_like_a_target(tmp_path):
                          universal_newlines=True, timeout=60)
     assert run.returncode == 0, run.stderr
     assert re.sub(r', \d+:\d\d$', '', run.stderr.splitlines()[0]) == '[tests] test/tools 1/1: 0 failed so far'
-    assert 'FAILED  test/tools/tools.xml: test_broken' in run.stderr.splitlines(), run.stderr
+    lines = run.stderr.splitlines()
+    assert lines[lines.index('FAILED  test/tools/tools.xml: test_broken') + 1] == WHY, run.stderr
 
 
 def test_a_job_that_writes_no_result_is_reported(tmp_path):
@@ -143,7 +149,7 @@ def test_the_closing_line_is_the_one_ci_reads(tmp_path):
     run = subprocess.run([sys.executable, TEST_SUMMARY, str(tmp_path)], stdout=subprocess.PIPE,
                          universal_newlines=True)
     assert run.returncode == 1
-    assert run.stdout.splitlines() == ['FAILED  robotiq-noetic/b.xml: test_broken', 'tests: 3 passed, 1 failed']
+    assert run.stdout.splitlines() == ['FAILED  robotiq-noetic/b.xml: test_broken', WHY, 'tests: 3 passed, 1 failed']
     assert CI_LINE.fullmatch(run.stdout.splitlines()[-1])
 
 
