@@ -138,7 +138,8 @@ def test_the_truth_is_mujocos_own(served):
     with server.lock:
         assert truth['objects']['held'][0] == pytest.approx(tuple(cell.object_pose('held')[0]), abs=1e-3)
         assert truth['arm_position'] == pytest.approx(tuple(cell.arm_position), abs=1e-3)
-    assert sorted(truth) == ['arm_position', 'contact_force', 'finger', 'gripper_base', 'objects']
+        assert truth['contact_impulse'] == pytest.approx(tuple(cell.contact_impulse()), abs=1e-9)
+    assert sorted(truth) == ['arm_position', 'contact_force', 'contact_impulse', 'finger', 'gripper_base', 'objects']
     assert len(truth['gripper_base'][1]) == 3 and truth['finger']['motion'] in ('moving', 'at_target')
     client.close()
 

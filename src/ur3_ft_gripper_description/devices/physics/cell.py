@@ -114,6 +114,7 @@ class Cell(object):
         self.timestep = float(self.model.opt.timestep)
         self._steps = 0  # timesteps taken: the time without a float's summed rounding
         self._debt = 0.0
+        self._contact_force_sums = (0.0, 0.0, 0.0)  # N, summed over the timesteps: contact_impulse()
         m = self.model
         # MuJoCo computes the bodies' contact forces (cfrc_ext) only for a sensor that needs them: the
         # FT 300's. Without one, the cell has them computed after each timestep, for the protective stop.
@@ -331,8 +332,9 @@ class Cell(object):
             elif self._servo_holds != start_list:
                 mujoco.mju_copy(servo, start)
                 self._servo_holds = start_list
-            limit = self.protective_stop_force
-            net, robot_rows, cfrc_ext = self._net_wrench, self._robot_rows, self._cfrc_ext
+        limit = self.protective_stop_force
+        net, robot_rows, cfrc_ext = self._net_wrench, self._robot_rows, self._cfrc_ext
+        sum_x, sum_y, sum_z = self._contact_force_sums
         gripper = self.gripper is not None
         if gripper:
             finger, ctrl = self._finger, self._ctrl
@@ -364,12 +366,14 @@ class Cell(object):
             count += 1
             if compute_contact_forces:
                 mujoco.mj_rnePostConstraint(model, data)
-            if following:
-                mujoco.mju_mulMatTVec(net, cfrc_ext, robot_rows)
-                _, _, _, fx, fy, fz = net.tolist()
-                if fx * fx + fy * fy + fz * fz > limit * limit:
-                    self._stop(math.sqrt(fx * fx + fy * fy + fz * fz))
-                    following = False
+            mujoco.mju_mulMatTVec(net, cfrc_ext, robot_rows)
+            _, _, _, fx, fy, fz = net.tolist()
+            sum_x += fx
+            sum_y += fy
+            sum_z += fz
+            if following and fx * fx + fy * fy + fz * fz > limit * limit:
+                self._stop(math.sqrt(fx * fx + fy * fy + fz * fz))
+                following = False
             if gripper:
                 if abs(qvel.item(finger_dof)) < STALL_SPEED:
                     stalled += timestep
@@ -379,6 +383,7 @@ class Cell(object):
                 self._keep_wrench_sample(count)
                 next_sample += self._sample_every
         self._steps, self._next_sample = count, next_sample
+        self._contact_force_sums = (sum_x, sum_y, sum_z)
         if gripper:
             finger['stalled'], self._finger_still = stalled, still
             self._finger_segment = low, high, base, slope, rate
@@ -439,6 +444,15 @@ class Cell(object):
         net = np.zeros(6)
         self.mujoco.mju_mulMatTVec(net, self._cfrc_ext, self._robot_rows)
         return net[3:]
+
+    def contact_impulse(self):
+        """Impulse (N s, world frame) that the world's contacts have put on the robot since the cell began.
+
+        contact_force() summed over every timestep taken, times the timestep: the difference of two
+        readings over their time apart is the exact mean force between them, which no sampling of
+        contact_force() gives (a contact's force changes from one timestep to the next).
+        """
+        return np.array(self._contact_force_sums) * self.timestep
 
     def _stop(self, force):
         self.protective_stop = ('the contact force on the robot, %.0f N, exceeded the %.0f N limit'

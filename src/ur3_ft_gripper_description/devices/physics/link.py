@@ -40,13 +40,16 @@ Protocol: request and reply are tuples, one reply per request, in order.
                                        command the fingers (m, m/s, N), then their state
     ('finger',)                     -> ('finger', time, state)     the state alone
     ('truth',)                      -> ('truth', time, {'contact_force': (fx, fy, fz),
+                                        'contact_impulse': (ix, iy, iz),
                                         'objects': {name: ((x, y, z), (qw, qx, qy, qz))},
                                         'gripper_base': ((x, y, z), 3x3 rows) or None,
                                         'arm_position': (rad, ...), 'finger': state or None})
                                        MuJoCo's own figures, for tests and benchmarks to judge
                                        the interfaces by: the world's net contact force on the
-                                       robot (N, world frame), the objects' poses and the 2F-140's
-                                       base pose (world frame)
+                                       robot (N, world frame) and its impulse since the cell began
+                                       (N s: two readings' difference over their time apart is the
+                                       exact mean force between them), the objects' poses and the
+                                       2F-140's base pose (world frame)
     anything else, or a failure     -> ('error', 'one line')
 
 `time` is the cell's simulated time (s); `state` is the cell's FingerState as a dict
@@ -217,7 +220,7 @@ def _truth(cell):
     if cell.gripper is not None:
         position, rotation = cell.body_pose(cell.gripper_base)
         base = (floats(position), tuple(floats(row) for row in rotation))
-    return dict(contact_force=floats(cell.contact_force()),
+    return dict(contact_force=floats(cell.contact_force()), contact_impulse=floats(cell.contact_impulse()),
                 objects={name: tuple(floats(v) for v in cell.object_pose(name)) for name in cell.objects},
                 gripper_base=base, arm_position=floats(cell.arm_position),
                 finger=dict(vars(cell.finger())) if cell.gripper is not None else None)
