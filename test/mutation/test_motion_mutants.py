@@ -4,6 +4,9 @@ The full run copies src/ once per fault and runs test_tool_motion.py (and the
 motion tests of test_ur_arm_core.py) against the copy; the fast tests check
 that the list still applies to today's tool_motion.py and covers every
 primitive.
+
+A test of the tests, run once by tools/quickstart test in the sourced workspace
+(the faults are in the package's own code, the same under every Python), not in each Python leg.
 """
 import importlib.util
 import os
