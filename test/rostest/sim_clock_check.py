@@ -38,6 +38,9 @@ SPAN = 10.0
 FT_PERIOD = 0.01       # rq_sensor's 100 Hz
 GRIPPER_PERIOD = 0.02  # the Robotiq driver's 50 Hz status
 GRIPPER_EDGES = 10     # statuses: 0.2 s of lag at the window's edges
+# The status window counted at these offsets (simulated s) too: the median count is that of windows whose
+# edges met no passing lag of the node or of this one.
+GRIPPER_OFFSETS = [0.2 * k for k in range(11)]
 # Reports of the real-time factor to check against /clock.
 REPORTS = 5
 # Stamps are whole nanoseconds: two readings a period apart differ by it to within a nanosecond.
@@ -139,7 +142,8 @@ class SimClockTest(unittest.TestCase):
         cls.rosout = rostest_helpers.Recorder('/rosout', Log)
         cls.bad_programs = BadPrograms(cls.start, cls.end)
         # Waits on simulated time: the window is over when /clock has passed its end by a second.
-        rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + 1.0, 'the end of the window on /clock',
+        after = GRIPPER_OFFSETS[-1] + 1.0
+        rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + after, 'the end of the windows on /clock',
                                  timeout=rostest_helpers.TIMEOUT + 60)
         # The factor is reported once a wall-clock second, over the last three: enough reports to check.
         rostest_helpers.wait_for(lambda: len(cls.streams.diagnostics) >= REPORTS + 3,
@@ -160,12 +164,18 @@ class SimClockTest(unittest.TestCase):
 
     def test_the_gripper_status_comes_at_50_hz_of_simulated_time(self):
         with self.streams.lock:
-            received = [t for t in self.streams.gripper if self.start <= t < self.end]
+            received = list(self.streams.gripper)
         # Received, not stamped (the register message has no header): a node running late serves the
         # ticks it missed at once, so a window of receipt times is off by the node's lag at its two
-        # edges, a few ticks on a saturated machine. A node that dropped the late ticks (rospy.Rate)
-        # falls short by the lag's whole sum instead.
-        self.assertAlmostEqual(len(received), SPAN / GRIPPER_PERIOD, delta=GRIPPER_EDGES)
+        # edges, a few ticks on a saturated machine, and by many when either process was descheduled
+        # there (19 once, with four busy processes beside). Hence the median over windows shifted
+        # across two simulated seconds. A node that dropped the late ticks (rospy.Rate) falls short in
+        # every window, by the lag's whole sum.
+        counts = sorted(len([t for t in received if self.start + offset <= t < self.end + offset])
+                        for offset in GRIPPER_OFFSETS)
+        median = counts[len(counts) // 2]
+        self.assertAlmostEqual(median, SPAN / GRIPPER_PERIOD, delta=GRIPPER_EDGES,
+                               msg='statuses in windows of %g simulated s: %s' % (SPAN, counts))
 
     def test_the_reported_real_time_factor_is_what_clock_and_the_wall_clock_show(self):
         # The node's factor is over the last 3 wall-clock s before it reports; the same window from
