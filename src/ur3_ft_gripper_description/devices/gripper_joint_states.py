@@ -80,7 +80,9 @@ def run(rospy):
         rospy.logfatal('%s: robot_description has no usable 2F-140 (%s); check ~prefix', name, exc)
         return 1
     table = JointTable(fingers, scale)
-    publisher = rospy.Publisher('gripper/joint_states', JointState, queue_size=10)
+    # Two seconds of the 50 Hz status, both ways: a node or subscriber served late (a busy machine, the
+    # cell at real_time_factor 0) gets every state late, none dropped from a queue.
+    publisher = rospy.Publisher('gripper/joint_states', JointState, queue_size=100)
     gate = node_loop.PublishGate(rospy)
 
     def on_status(msg):
@@ -91,7 +93,7 @@ def run(rospy):
         gate.call(publisher.publish, state)
 
     rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, on_status,
-                     queue_size=10)
+                     queue_size=100)
     rospy.loginfo('%s: %s from gPO (%g open .. %g closed) on gripper/joint_states', name,
                   table.joint_name, scale.gpo_open, scale.gpo_closed)
     return node_loop.spin(rospy)
