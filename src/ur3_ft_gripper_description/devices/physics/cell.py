@@ -109,6 +109,7 @@ class Cell(object):
         self.data = self.mujoco.MjData(self.model)
         # The arrays stepped through at every timestep, taken once: each attribute access makes a new view.
         self._ctrl, self._qpos, self._qvel = self.data.ctrl, self.data.qpos, self.data.qvel
+        self._qpos_view, self._qvel_view = memoryview(self._qpos), memoryview(self._qvel)
         self._cfrc_ext, self._sensordata = self.data.cfrc_ext, self.data.sensordata
         self._actfrcrange = self.model.jnt_actfrcrange
         self.timestep = float(self.model.opt.timestep)
@@ -142,7 +143,7 @@ class Cell(object):
         self._arm_position_servo = self._ctrl[self._arm_position_ctrl]
         self._arm_velocity_servo = self._ctrl[self._arm_velocity_ctrl]
         # The inertia feedforward's change of velocity and torque of every dof, made once, and their arm
-        # parts; per number of timesteps a call, the diagonal matrix that turns the torque into the
+        # parts; per number of timesteps a call, the factors 1 / (kp T) that turn the torque into the
         # position servo's offset.
         self._feedforward, self._feedforward_torque = np.zeros(m.nv), np.zeros(m.nv)
         self._arm_feedforward = self._feedforward[self._arm_dofs]
@@ -150,6 +151,21 @@ class Cell(object):
         self._offsets_per_torque = {}
         # How far the servos' reference goes over a step() call, and where it starts (feedforward included).
         self._reference_change, self._reference_origin = np.zeros(len(self.arm_joints)), np.zeros(len(self.arm_joints))
+        # The reference: where the servos' reference is now (the start of the next call), where it goes
+        # next and its velocity; made once, set_arm_reference and step() copy into them.
+        self._reference, self._next_reference = np.zeros(len(self.arm_joints)), np.zeros(len(self.arm_joints))
+        self._reference_velocity = np.zeros(len(self.arm_joints))
+        # Memoryviews of the arrays that step() copies, compares, reads or writes a few values of between
+        # two MuJoCo steps: a memoryview's copy, comparison or item costs a fraction of a numpy call.
+        self._reference_view = memoryview(self._reference)
+        self._next_reference_view = memoryview(self._next_reference)
+        self._reference_velocity_view = memoryview(self._reference_velocity)
+        self._position_servo_view = memoryview(self._arm_position_servo)
+        self._velocity_servo_view = memoryview(self._arm_velocity_servo)
+        self._arm_feedforward_view = memoryview(self._arm_feedforward)
+        self._arm_feedforward_torque_view = memoryview(self._arm_feedforward_torque)
+        self._reference_origin_view = memoryview(self._reference_origin)
+        self._arm_range = range(len(self.arm_joints))
         self.arm_lower = np.array([m.jnt_range[j][0] for j in joint_ids])
         self.arm_upper = np.array([m.jnt_range[j][1] for j in joint_ids])
         self.urdf_text = urdf_text
@@ -160,6 +176,7 @@ class Cell(object):
         self._robot_rows = np.zeros(m.nbody)
         self._robot_rows[self.robot_bodies] = 1.0
         self._net_wrench = np.zeros(6)
+        self._net_wrench_view = memoryview(self._net_wrench)
         self.protective_stop_force = float(self.figures['arm']['protective_stop_force'])
         self.protective_stop = None
 
@@ -176,12 +193,14 @@ class Cell(object):
         self._flange_torque = _sensor_slice(m, flange + mjcf.TORQUE_SUFFIX)
         self.wrench_sample_period = None
         self._wrench_samples, self._wrench_dropped = collections.deque(), 0
-        self._sample_every = self._next_sample = None
+        self._sample_every, self._next_sample = None, 0  # 0: none kept (step() compares it with 1 and on)
 
         # -- the 2F-140
         self.gripper = None
+        self._has_gripper = False  # gripper is not None as a bool: step() need not touch the gripper's object
         if self.finger_joint in names:
             self.gripper = GripperKinematics(urdf_text, prefix)
+            self._has_gripper = True
             self.gripper_base = self.gripper.model.joints[self.finger_joint].parent
             self._rates = np.abs(np.gradient(self.gripper.openings, self.gripper.angles))
             # The finger drive's tables as Python lists, for a lookup at every timestep without numpy's
@@ -193,14 +212,16 @@ class Cell(object):
             self._finger_segment = (0.0, 0.0, 0.0, 0.0, 0.0)  # none yet: the first timestep finds its own
             self._increasing_openings = -self.gripper.openings  # GripperKinematics.angle's table, made once
             self._finger_still = False  # whether the drive's velocity input is 0 since the ramp's end
+            self._finger_ramping = True  # whether the drive's target moves along a ramp (command_finger)
             joint = m.joint(self.finger_joint).id
             self._finger_joint = joint
-            self._finger_qpos = m.jnt_qposadr[joint]
-            self._finger_dof = m.jnt_dofadr[joint]
+            self._finger_qpos = int(m.jnt_qposadr[joint])
+            self._finger_dof = int(m.jnt_dofadr[joint])
             self._finger_ctrl = m.actuator(self.finger_joint).id
             self._finger_velocity_ctrl = m.actuator(self.finger_joint + mjcf.VELOCITY_SUFFIX).id
             m.jnt_actfrclimited[joint] = 1
             self._finger_torque_range = self._actfrcrange[joint]
+            self._finger_torque_range_view = memoryview(self._finger_torque_range)
             gripper = self.figures['gripper']
             self.grip_force_range = (float(gripper['grip_force_min']), float(gripper['grip_force_max']))
             self.finger_tolerance = float(gripper['target_tolerance'])
@@ -254,14 +275,12 @@ class Cell(object):
             raise ValueError('initial arm position %r: need %d positions within the joints\' limits'
                              % (arm.tolist(), len(self.arm_joints)))
         d.qpos[self._arm_qpos] = arm
-        self._reference = arm.copy()
-        self._reference_velocity = np.zeros(len(arm))
-        self._next_reference = arm.copy()
         self._hold_reference()
         if self.gripper is not None:
             opening = self.gripper.opening(d.qpos[self._finger_qpos])
             self._finger.update(target=opening, ramp=opening)
             self._ramp_finger(0.0)
+            self._finger_ramping = False
             self._limit_finger_torque()
         self.mujoco.mj_forward(m, d)
         depths = [self._contact_depth(i) for i in range(d.ncon)]
@@ -291,83 +310,101 @@ class Cell(object):
     def step(self, dt):
         """Let `dt` seconds pass in whole timesteps (the remainder is carried over); returns how many."""
         # This loop is the cell's whole cost beside MuJoCo's (bench/physics.py measures the two side by
-        # side): at every timestep only what changes from one to the next, in as few calls as may be.
+        # side): at every timestep only what changes from one to the next, in as little code as may be.
         # Between two MuJoCo steps, which leave little of Python's code and data in the processor's
-        # caches, a numpy call on a few values costs 1-1.5 us; MuJoCo's vector functions (mju_*) cost
-        # less for a copy or a sum (0.8-0.9 us), a numpy item 0.15 us.
+        # caches, each piece of code run costs more than in a tight loop: a call through MuJoCo's
+        # bindings (mju_*) ~1 us, a numpy call 1-1.5 us; a memoryview's copy, comparison or item and
+        # Python's float arithmetic much less. Built-in calls (float, max, int, range, abs) cost too:
+        # the usual call (a float dt, one timestep) makes none.
         timestep = self.timestep
-        self._debt += max(float(dt), 0.0)
-        steps = int(self._debt / timestep + 1e-9)
+        if type(dt) is not float:
+            dt = float(dt)
+        if dt < 0.0:  # max(dt, 0.0), NaN kept
+            dt = 0.0
+        debt = self._debt + dt
+        timesteps = debt / timestep + 1e-9
+        steps = 1 if 1.0 <= timesteps < 2.0 else int(timesteps)
         if not steps:
+            self._debt = debt
             return 0
-        self._debt -= steps * timestep
+        self._debt = debt - steps * timestep
         mujoco, model, data = self.mujoco, self.model, self.data
         # A protective stop already holding the arm keeps its hold reference for the whole call; one
         # tripped in a substep holds the arm from the next substep on.
         following = self.protective_stop is None
         change = None  # how far the reference goes over the call, when it moves
         if following:
-            start, velocity = self._reference, self._reference_velocity
-            servo, start_list, velocity_list = self._arm_position_servo, start.tolist(), velocity.tolist()
+            start, start_view = self._reference, self._reference_view
             origin = start  # the position servos' reference at the call's first substep
             # The reference goes linearly from start to its next position over the call's substeps
             # (the first substep has start itself: one substep needs no interpolation).
-            if steps > 1 and self._next_reference.tolist() != start_list:
+            if steps > 1 and self._next_reference_view != start_view:
                 change = self._reference_change
                 mujoco.mju_sub(change, self._next_reference, start)
-            if velocity_list != self._previous_velocity_list:
+            # The velocity servos' input is the reference's velocity of the call before.
+            if self._reference_velocity_view != self._velocity_servo_view:
                 # The servo's inertia feedforward: the torque that accelerating the arm along the reference
                 # takes (mass matrix, armature included, times the reference's acceleration), given as an
                 # offset of the position servo's reference. Once a call, at the state it starts from: a
                 # robot's controller computes it once a control cycle.
-                # M (v - v_previous), then divided by kp and by the call's duration in one product.
-                mujoco.mju_sub(self._arm_feedforward, velocity, self._previous_velocity)
+                # start + M (v - v_previous) / (kp T): MuJoCo's product, the rest in Python floats through
+                # memoryviews (the same arithmetic as MuJoCo's vector functions, in fewer calls).
+                velocity, previous = self._reference_velocity_view.tolist(), self._velocity_servo_view.tolist()
+                feedforward = self._arm_feedforward_view
+                for i in self._arm_range:
+                    feedforward[i] = velocity[i] - previous[i]
                 mujoco.mj_mulM(model, data, self._feedforward_torque, self._feedforward)
-                origin = servo if change is None else self._reference_origin  # constant: the servo's own
-                mujoco.mju_mulMatVec(origin, self._offset_per_torque(steps), self._arm_feedforward_torque)
-                mujoco.mju_addTo(origin, start)
-                mujoco.mju_copy(self._arm_velocity_servo, velocity)  # else it holds this velocity already
-            if origin is not start or change is not None:
-                self._servo_holds = None
-            elif self._servo_holds != start_list:
-                mujoco.mju_copy(servo, start)
-                self._servo_holds = start_list
+                factors = self._offsets_per_torque.get(steps) or self._offset_per_torque(steps)
+                torque, start_values = self._arm_feedforward_torque_view.tolist(), start_view.tolist()
+                if change is None:  # held for the whole call: straight into the servos' ctrl
+                    origin_view = self._position_servo_view
+                else:
+                    origin, origin_view = self._reference_origin, self._reference_origin_view
+                for i in self._arm_range:
+                    origin_view[i] = start_values[i] + torque[i] * factors[i]
+                self._velocity_servo_view[:] = self._reference_velocity_view
+            elif change is None and self._position_servo_view != start_view:
+                self._position_servo_view[:] = start_view
         limit = self.protective_stop_force
         net, robot_rows, cfrc_ext = self._net_wrench, self._robot_rows, self._cfrc_ext
+        net_view, servo = self._net_wrench_view, self._arm_position_servo
         sum_x, sum_y, sum_z = self._contact_force_sums
-        gripper = self.gripper is not None
+        gripper = self._has_gripper
         if gripper:
-            finger, ctrl = self._finger, self._ctrl
-            ramping = finger['ramp'] != finger['target'] or finger['angle'] is None
+            finger, ramping = self._finger, self._finger_ramping
             still, stalled, force = self._finger_still, finger['stalled'], finger['force']
-            qpos, qvel, finger_qpos, finger_dof = self._qpos, self._qvel, self._finger_qpos, self._finger_dof
-            cap = self._finger_torque_range
+            qpos, qvel = self._qpos_view, self._qvel_view
+            finger_qpos, finger_dof = self._finger_qpos, self._finger_dof
+            cap = self._finger_torque_range_view
             # The rates' table segment the fingers are in: gripping, they stay in it for many timesteps.
-            low, high, base, slope, rate = self._finger_segment
+            segment = self._finger_segment
+            low, high, base, slope, rate = segment
         compute_contact_forces = self._compute_contact_forces
         count, next_sample = self._steps, self._next_sample
-        for k in range(steps):
+        k = 0
+        while k < steps:  # not a for loop over range(steps): a call
             if change is not None and following:
                 mujoco.mju_addScl(servo, origin, change, float(k) / steps)
             if gripper:
                 if ramping:
                     ramping, still = self._ramp_finger(timestep), False
                 elif not still:
-                    ctrl[self._finger_velocity_ctrl] = 0.0
+                    self._ctrl[self._finger_velocity_ctrl] = 0.0
                     still = True
                 # The drive's torque cap: what squeezes with the commanded force at this angle.
-                angle = qpos.item(finger_qpos)
+                angle = qpos[finger_qpos]
                 if not low <= angle < high:
-                    low, high, base, slope, rate = self._rate_segment(angle)
+                    segment = self._rate_segment(angle)
+                    low, high, base, slope, rate = segment
                 finger_torque = force * (slope * (angle - base) + rate)
-                cap[0] = -finger_torque  # two numpy items: cheaper than any call on the pair
+                cap[0] = -finger_torque  # two memoryview items: no call
                 cap[1] = finger_torque
             mujoco.mj_step(model, data)
             count += 1
             if compute_contact_forces:
                 mujoco.mj_rnePostConstraint(model, data)
             mujoco.mju_mulMatTVec(net, cfrc_ext, robot_rows)
-            _, _, _, fx, fy, fz = net.tolist()
+            _, _, _, fx, fy, fz = net_view.tolist()
             sum_x += fx
             sum_y += fy
             sum_z += fz
@@ -375,30 +412,29 @@ class Cell(object):
                 self._stop(math.sqrt(fx * fx + fy * fy + fz * fz))
                 following = False
             if gripper:
-                if abs(qvel.item(finger_dof)) < STALL_SPEED:
+                if -STALL_SPEED < qvel[finger_dof] < STALL_SPEED:  # abs(): a call
                     stalled += timestep
                 else:
                     stalled = 0.0
             if count == next_sample:
                 self._keep_wrench_sample(count)
                 next_sample += self._sample_every
+            k += 1
         self._steps, self._next_sample = count, next_sample
         self._contact_force_sums = (sum_x, sum_y, sum_z)
         if gripper:
             finger['stalled'], self._finger_still = stalled, still
-            self._finger_segment = low, high, base, slope, rate
+            self._finger_segment, self._finger_ramping = segment, ramping
         if following:
-            # No copies: these arrays are replaced, never changed in place.
-            self._reference, self._previous_velocity = self._next_reference, velocity
-            self._previous_velocity_list = velocity_list
+            self._reference_view[:] = self._next_reference_view
         return steps
 
     def _offset_per_torque(self, steps):
-        """diag(1 / (kp T)), T the duration of `steps` timesteps: M (v - v_previous) times it is the offset."""
-        matrix = self._offsets_per_torque.get(steps)
-        if matrix is None:
-            matrix = self._offsets_per_torque[steps] = np.diag(1.0 / (self._arm_kp * (steps * self.timestep)))
-        return matrix
+        """[1 / (kp T)], T the duration of `steps` timesteps: M (v - v_previous) times it is the offset."""
+        factors = self._offsets_per_torque.get(steps)
+        if factors is None:
+            factors = self._offsets_per_torque[steps] = (1.0 / (self._arm_kp * (steps * self.timestep))).tolist()
+        return factors
 
     # -- the arm ------------------------------------------------------------------
 
@@ -422,22 +458,31 @@ class Cell(object):
         """
         if self.protective_stop is not None:
             return
-        self._next_reference = np.array(position, dtype=float)
-        self._reference_velocity = np.array(velocity, dtype=float)
+        try:
+            # Copied through memoryviews: the arm's node calls this every cycle, and a memoryview copies
+            # an array of as many floats for a fraction of a numpy call.
+            self._next_reference_view[:] = position
+            self._reference_velocity_view[:] = velocity
+        except (TypeError, ValueError):  # anything else (a list, ints): numpy converts it
+            self._next_reference[:] = self._arm_values(position, 'position')
+            self._reference_velocity[:] = self._arm_values(velocity, 'velocity')
 
-    def _set_arm_ctrl(self, position, velocity):
-        self._arm_position_servo[:] = position
-        self._arm_velocity_servo[:] = velocity
-        self._servo_holds = np.asarray(position).tolist()  # what the position servos hold, if constant
+    def _arm_values(self, values, what):
+        """`values` as floats, one per arm joint."""
+        array = np.asarray(values, dtype=float)
+        if array.shape != self._reference.shape:
+            raise ValueError('arm reference %s of shape %s: need %d values'
+                             % (what, array.shape, len(self._reference)))
+        return array
 
     def _hold_reference(self):
         """Hold the arm where it is now."""
-        self._reference = self.arm_position
-        self._next_reference = self._reference.copy()
-        self._reference_velocity = np.zeros(len(self._reference))
-        self._previous_velocity = self._reference_velocity.copy()
-        self._previous_velocity_list = self._previous_velocity.tolist()
-        self._set_arm_ctrl(self._reference, self._reference_velocity)
+        self._reference[:] = self.arm_position
+        self._next_reference[:] = self._reference
+        self._reference_velocity[:] = 0.0
+        # The servos hold it; the velocity servos' input is also the velocity of the reference before.
+        self._arm_position_servo[:] = self._reference
+        self._arm_velocity_servo[:] = 0.0
 
     def contact_force(self):
         """Net force (N, world frame) that the world's contacts put on the robot."""
@@ -534,6 +579,7 @@ class Cell(object):
         state['force'] = min(max(float(force), self.grip_force_range[0]), self.grip_force_range[1])
         state['closing'] = state['target'] < current
         state['stalled'] = 0.0
+        self._finger_ramping = True
 
     def _rate(self, angle):
         """d(gap)/d(angle) at `angle`: np.interp in the rates' table, its arithmetic in Python floats."""
