@@ -67,6 +67,9 @@ class GuardedTouch(object):
             if self.rospy.get_time() > end:
                 self.arm.twist()
                 raise clients.CellError('no %g N of contact within %g s' % (limit, timeout))
+            # A contact the FT 300 does not see (an arm link's) can stop the robot: then say so, the twist
+            # zeroed first (the controller holds the last one, to go on after the stop is released).
+            self.stop_if_unsafe()
             rate.sleep()
         self.arm.twist()
         detected_height = self.tool_height()
@@ -80,6 +83,13 @@ class GuardedTouch(object):
                     peak_force=peak, overshoot_force=peak - limit, overshoot_travel=detected_height - stopped_height,
                     steady_force=clients.force_norm(steady), steady_wrench=steady)
 
+    def stop_if_unsafe(self):
+        try:
+            self.arm.check_safety()
+        except clients.CellError:
+            self.arm.twist()
+            raise
+
     def back_off(self, speed):
         """Up until the force is gone and 10 mm more, then back on the trajectory controller."""
         rate = self.rospy.Rate(TWIST_RATE)
@@ -91,6 +101,7 @@ class GuardedTouch(object):
                 clear = self.rospy.get_time()
             if clear is not None and self.rospy.get_time() - clear > 0.01 / speed:
                 break
+            self.stop_if_unsafe()
             rate.sleep()
         self.arm.twist()
         self.rospy.sleep(0.2)
