@@ -180,8 +180,16 @@ class SimDevicesTest(unittest.TestCase):
         rng = np.random.default_rng(7)
         for arm in [ZERO] + [list(rng.uniform(-math.pi, math.pi, 6)) for _ in range(4)]:
             rotation = self.move_to(arm)
-            force, torque = self.reading(self.wrench)
             expected_force, expected_torque = expected_wrench(rotation, self.gripper_mass, self.gripper_com)
+            # The sensor's node sees the new pose through its own TF listener, later than this node when
+            # the machine is busy (past the tolerance once, in a fresh root at load 12): the readings of the next
+            # few seconds, until one shows it. A wrong gravity model never does.
+            deadline = time.monotonic() + 10.0
+            while True:
+                force, torque = self.reading(self.wrench)
+                if time.monotonic() > deadline or (np.allclose(force, expected_force, atol=FORCE_ATOL) and
+                                                   np.allclose(torque, expected_torque, atol=TORQUE_ATOL)):
+                    break
             np.testing.assert_allclose(force, expected_force, atol=FORCE_ATOL, err_msg=str(arm))
             np.testing.assert_allclose(torque, expected_torque, atol=TORQUE_ATOL, err_msg=str(arm))
 
@@ -197,8 +205,12 @@ class SimDevicesTest(unittest.TestCase):
     def test_both_topics_carry_the_same_values_in_the_devices_resolution(self):
         self.move_to(OTHER)
         start = time.monotonic()
-        self.stream.next_after(start + 0.5)
+        # Waits for the readings, not for a time: a node starved by a busy machine publishes late.
+        rostest_helpers.wait_for(lambda: len(self.wrench.since(start)) > 10, 'robotiq_ft_wrench readings', TIMEOUT)
         wrenches = self.wrench.since(start)
+        # One reading of robotiq_ft_sensor received after them: the node has published each pair's other
+        # half before it, and a connection delivers in order.
+        self.stream.next_after(time.monotonic())
         streams = {(m.Fx, m.Fy, m.Fz, m.Mx, m.My, m.Mz) for m in self.stream.since(start)}
         self.assertGreater(len(wrenches), 10)
         for msg in wrenches:
@@ -323,7 +335,11 @@ class SimDevicesTest(unittest.TestCase):
     def test_gripper_closes_at_its_speed_and_the_joint_reaches_closed(self):
         self.activate(self.command, self.gripper_status)
         t0 = time.monotonic()
-        self.command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=150))
+        # At rSP 0, the slowest: the joint's stamps are its relay's receipt times, and a busy machine
+        # bunches them by a fifth of a simulated second now and then; over the top speed's half-second
+        # stroke that left 5 states in it once, over the slowest's four seconds it is a few per cent.
+        # (test/physics checks the pads' speed at rSP 0, 128 and 255 on the cell's own clock.)
+        self.command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=255, rSP=0, rFR=150))
         self.wait_status(self.gripper_status, lambda s: s.gPO == 230 and s.gOBJ == 3)
         scale = gripper_model.RegisterScale(0.140, 3, 230)  # config/sim_devices.yaml
         # The pads' gap over the finger joint's stamps (ROS time: simulated on the physics cell, whatever
@@ -333,7 +349,7 @@ class SimDevicesTest(unittest.TestCase):
         moving = [(t, o) for t, o in openings if scale.opening(210) < o < scale.opening(20)]
         self.assertGreater(len(moving), 10)
         slope = np.polyfit([t - moving[0][0] for t, _ in moving], [o for _, o in moving], 1)[0]
-        self.assertAlmostEqual(slope, -0.250, delta=0.04)  # m/s, the 2F-140's top speed at rSP 255
+        self.assertAlmostEqual(slope, -0.030, delta=0.005)  # m/s, the 2F-140's slowest, at rSP 0
         joint = self.gripper_joints.next_after(time.monotonic() + 0.1)
         self.assertEqual(joint.name, ['finger_joint'])
         self.assertAlmostEqual(self.fingers.opening(joint.position[0]), 0.0, places=6)  # pads touch
