@@ -21,7 +21,6 @@ import types
 import numpy as np
 import pytest
 import rospkg
-import yaml
 
 from ur3_ft_gripper_description import clients, kinematics
 from ur3_ft_gripper_description.devices import gripper_sim
@@ -107,16 +106,6 @@ def stands_within(low, high, cycles):
         inside = inside + 1 if low <= status['gPO'] <= high else 0
         return inside >= cycles
     return done
-
-
-def grasp_matrix_text():
-    """The grasp matrix world for make_cell, which writes it elsewhere: its mesh paths made absolute."""
-    with open(WORLD) as f:
-        world = yaml.safe_load(f)
-    for solid in world['objects']:
-        if 'mesh' in solid:
-            solid['mesh'] = os.path.join(os.path.dirname(WORLD), solid['mesh'])
-    return yaml.safe_dump(world)
 
 
 def tool_kinematics(robot):
@@ -226,13 +215,14 @@ def arm_settings(robot, initial):
 
 
 @pytest.fixture
-def cycles(make_cell, robot, tmp_path):
+def cycles(mujoco, robot, tmp_path):
     """cycles(initial arm) -> Cycles in the grasp matrix world; closed after the test."""
+    from ur3_ft_gripper_description.devices.physics.cell import Cell
     made = []
 
     def make(initial):
         settings = arm_settings(robot, initial)
-        cell = make_cell(grasp_matrix_text(), settings.initial)
+        cell = Cell(robot[0], robot[1], load_world(WORLD), initial_arm=settings.initial)
         made.append(Cycles(cell, settings, robot, str(tmp_path / ('cell%d.sock' % len(made)))))
         return made[-1]
     yield make
