@@ -20,15 +20,19 @@ kinematics for the model in ``robot_description`` (yours, calibrated), for
 the 2F-140's ``gripper_tcp``. Every wait ends, on time or with a
 ``CellError`` naming what did not happen.
 
-Every wait and every timeout is on ROS time (``rospy.get_time``,
+Every wait for something the cell does is on ROS time (``rospy.get_time``,
 ``rospy.sleep``, the messages' stamps), never the wall clock: on a simulated
 cell with ``use_sim_time`` they run unchanged at any real-time factor, and on
-a busy machine they wait for the cell, which slows down with it.
+a busy machine they wait for the cell, which slows down with it. Only the
+waits for the driver's nodes to be there (their servers, topics and first
+messages) are on the wall clock, as ``rospy.wait_for_service`` is: a process
+coming up takes wall time, however fast the cell's clock runs.
 """
 
 import collections
 import math
 import threading
+import time
 
 import numpy as np
 
@@ -56,6 +60,19 @@ def wait_until(rospy, condition, what, timeout, step=0.01):
         if rospy.get_time() > end:
             raise CellError('no %s within %g s' % (what, timeout))
         rospy.sleep(step)
+
+
+def wait_until_up(rospy, condition, what, timeout, step=0.02):
+    """The first true value of condition(), or CellError naming `what` after `timeout` s of wall-clock time:
+    for a node of the driver to be there, which takes the same wall time at any real-time factor."""
+    end = time.monotonic() + timeout
+    while True:
+        value = condition()
+        if value:
+            return value
+        if time.monotonic() > end or rospy.is_shutdown():
+            raise CellError('no %s within %g s' % (what, timeout))
+        time.sleep(step)
 
 
 class ToolKinematics(object):
@@ -120,8 +137,9 @@ class UrArm(object):
         rospy.Subscriber('joint_states', JointState, self._on_joint_state, queue_size=1)
         self.trajectory = actionlib.SimpleActionClient(TRAJECTORY_CONTROLLER + '/follow_joint_trajectory',
                                                        FollowJointTrajectoryAction)
-        if not self.trajectory.wait_for_server(rospy.Duration(timeout)):
-            raise CellError('no action server %s/follow_joint_trajectory: is the arm up?' % TRAJECTORY_CONTROLLER)
+        # Short waits on ROS time inside a wall-clock one: see wait_until_up.
+        wait_until_up(rospy, lambda: self.trajectory.wait_for_server(rospy.Duration(0.01)),
+                      'action server %s/follow_joint_trajectory (is the arm up?)' % TRAJECTORY_CONTROLLER, timeout)
         rospy.wait_for_service('controller_manager/switch_controller', timeout)
         self.switch = rospy.ServiceProxy('controller_manager/switch_controller', SwitchController)
         self.twist_publisher = rospy.Publisher('twist_controller/command', Twist, queue_size=1)
@@ -130,7 +148,7 @@ class UrArm(object):
         self.safety_mode = None
         rospy.Subscriber(HARDWARE_INTERFACE + 'safety_mode', SafetyMode,
                          lambda msg: setattr(self, 'safety_mode', self.safety_names.get(msg.mode)), queue_size=1)
-        wait_until(rospy, lambda: self.positions is not None, 'joint_states of the arm', timeout)
+        wait_until_up(rospy, lambda: self.positions is not None, 'joint_states of the arm', timeout)
 
     def _on_joint_state(self, msg):
         if self.joints[0] in msg.name:
@@ -207,8 +225,8 @@ class Gripper2F(object):
         rospy.Subscriber('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input, self._on_status, queue_size=10)
         self.publisher = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output,
                                          queue_size=10)
-        wait_until(rospy, lambda: self.status is not None and self.publisher.get_num_connections(),
-                   'gripper status and command subscriber', timeout)
+        wait_until_up(rospy, lambda: self.status is not None and self.publisher.get_num_connections(),
+                      'gripper status and command subscriber', timeout)
 
     def _on_status(self, msg):
         with self._condition:
@@ -258,7 +276,7 @@ class FT300(object):
         rospy.Subscriber('robotiq_ft_wrench', WrenchStamped, self._on_wrench, queue_size=100)
         rospy.wait_for_service('robotiq_ft_sensor_acc', timeout)
         self.accessor = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
-        wait_until(rospy, lambda: self.readings, 'robotiq_ft_wrench', timeout)
+        wait_until_up(rospy, lambda: self.readings, 'robotiq_ft_wrench', timeout)
 
     def _on_wrench(self, msg):
         f, t = msg.wrench.force, msg.wrench.torque
@@ -320,8 +338,9 @@ class UrScript(object):
         rospy.Subscriber(HARDWARE_INTERFACE + 'robot_program_running', Bool,
                          lambda msg: setattr(self, 'program_running', msg.data), queue_size=1)
         rospy.Subscriber('wrench', WrenchStamped, self._on_wrench, queue_size=100)
-        wait_until(rospy, lambda: self.publisher.get_num_connections() > 0, 'subscriber of script_command', timeout)
-        wait_until(rospy, lambda: self.program_running is not None, 'robot_program_running', timeout)
+        wait_until_up(rospy, lambda: self.publisher.get_num_connections() > 0, 'subscriber of script_command',
+                      timeout)
+        wait_until_up(rospy, lambda: self.program_running is not None, 'robot_program_running', timeout)
 
     def _on_wrench(self, msg):
         f, t = msg.wrench.force, msg.wrench.torque
