@@ -16,6 +16,7 @@ state must still come, one per period: a bad program never stops the node.
 After them a program still runs, and the node refused the ones that do not
 compile, each on one line.
 """
+import bisect
 import threading
 import time
 import unittest
@@ -124,6 +125,24 @@ class Streams(object):
             self.newest = max(self.newest, rospy.get_time())
             self.gripper.append(self.newest)
 
+    def factors_beside_clock(self):
+        """(reported, measured) for each report of the real-time factor with a whole window of /clock beside
+        it: the node's factor is over the last 3 wall-clock s before it reports; measured is the same window
+        from this node's records of /clock, taken when each arrives. A busy machine leaves some reports
+        without one (this node's /clock came late), so the test waits for enough that have one."""
+        with self.lock:
+            reports = list(self.diagnostics)
+            clock = list(self.clock)
+        walls = [w for w, _ in clock]  # in order of arrival: sorted
+        pairs = []
+        for wall, reported in reports[2:]:
+            first, end = bisect.bisect_left(walls, wall - 3.0), bisect.bisect_right(walls, wall)
+            if end - first < 100 or walls[first] > wall - 2.9:
+                continue
+            (w0, c0), (w1, c1) = clock[first], clock[end - 1]
+            pairs.append((reported, (c1 - c0) / (w1 - w0)))
+        return pairs
+
     def _on_diagnostics(self, msg):
         for status in msg.status:
             values = {v.key: v.value for v in status.values}
@@ -159,8 +178,9 @@ class SimClockTest(unittest.TestCase):
         rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + after, 'the end of the windows on /clock',
                                  timeout=rostest_helpers.TIMEOUT + 60)
         # The factor is reported once a wall-clock second, over the last three: enough reports to check.
-        rostest_helpers.wait_for(lambda: len(cls.streams.diagnostics) >= REPORTS + 3,
-                                 '%d reports of the real-time factor on /diagnostics' % (REPORTS + 3))
+        rostest_helpers.wait_for(lambda: len(cls.streams.factors_beside_clock()) >= REPORTS,
+                                 '%d reports of the real-time factor on /diagnostics with /clock beside them'
+                                 % REPORTS)
 
     def test_the_ft300_stream_has_one_reading_per_10_ms_of_simulated_time(self):
         stamps = in_window(self.streams.wrench, self.start_ns, self.end_ns)
@@ -200,25 +220,16 @@ class SimClockTest(unittest.TestCase):
                 first - self.start, second - self.start, counts)))
 
     def test_the_reported_real_time_factor_is_what_clock_and_the_wall_clock_show(self):
-        # The node's factor is over the last 3 wall-clock s before it reports; the same window from
-        # this node's records of /clock, taken when it arrives.
-        with self.streams.lock:
-            reports = list(self.streams.diagnostics)
-            clock = list(self.streams.clock)
-        checked = 0
-        for wall, reported in reports[2:]:
-            before = [(w, c) for w, c in clock if w <= wall]
-            window = [(w, c) for w, c in before if w >= wall - 3.0]
-            if len(window) < 100 or window[0][0] > wall - 2.9:
-                continue
-            (w0, c0), (w1, c1) = window[0], window[-1]
-            measured = (c1 - c0) / (w1 - w0)
-            self.assertAlmostEqual(reported, measured, delta=0.1 * measured,
-                                   msg='reported %.3f, /clock over the wall clock %.3f' % (reported, measured))
-            checked += 1
-        self.assertGreaterEqual(checked, REPORTS, 'diagnostics with a whole window of /clock beside them')
+        pairs = self.streams.factors_beside_clock()
+        self.assertGreaterEqual(len(pairs), REPORTS, 'diagnostics with a whole window of /clock beside them')
+        # The median of the ratios: this node's arrival times of /clock are off by its lags at a window's
+        # two edges, 12 % once over 3 s on a busy machine, while a node that reports a wrong factor is off
+        # in every window.
+        ratios = sorted(reported / measured for reported, measured in pairs)
+        self.assertAlmostEqual(ratios[len(ratios) // 2], 1.0, delta=0.1, msg=(
+            'reported over measured factors: %s' % ', '.join('%.3f' % r for r in ratios)))
         rospy.loginfo('sim_clock_check: /clock ran at %.2f x the wall clock (real_time_factor 0, %g Hz)'
-                      % (measured, self.loop_hz))
+                      % (pairs[-1][1], self.loop_hz))
 
     def test_after_the_bad_programs_a_program_runs_and_each_refusal_was_one_line(self):
         self.bad_programs.thread.join(rostest_helpers.TIMEOUT)
