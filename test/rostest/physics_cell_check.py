@@ -11,9 +11,12 @@ contact forces, object poses), never by the interface's own readings alone:
 - examples/pick_and_weigh.py, run as a user runs it: the weight read from robotiq_ft_wrench after
   SET_ZERO is the world file's mass within 2 %, and the object ends on the table where it stood;
 - a held object stays in the grasp while the scaled trajectory controller swings it at the joints'
-  full speed (the slip is printed);
-- examples/guarded_touch.py: the arm stops on the table at 10 N, and the steady force the FT 300 reads
-  is MuJoCo's contact force.
+  full speed (the slip is printed).
+
+Not examples/guarded_touch.py: it reacts to what it reads, and at real_time_factor 0 the cell runs on
+while the reacting process is descheduled. Beside other work, a touch at 5 mm/s still pressed to the
+protective stop (150 N) twice in fresh roots, as doc/simulation.md warns. physics_under_load.test
+checks it at factor 1, quiet and loaded, against MuJoCo's contact force.
 
 The tests run in the order of their names: each leaves the cell as the next expects it.
 """
@@ -33,17 +36,10 @@ from ur3_ft_gripper_testing.grasp import gpo_tolerance
 
 PACKAGE_DIR = rospkg.RosPack().get_path('ur3_ft_gripper_description')
 # The examples, as shipped.
-guarded_touch = shipped.script('examples/guarded_touch.py')
 pick_and_weigh = shipped.script('examples/pick_and_weigh.py')
 
 WORLD = os.path.join(PACKAGE_DIR, 'test', 'data', 'worlds', 'grasp_matrix.yaml')
 WEIGHT_TOLERANCE = 0.02
-# The steady force of the guarded touch against MuJoCo's contact force, relative.
-CONTACT_TOLERANCE = 0.02
-# The guarded touch's speed (m/s). The touch reacts in this process, and at real_time_factor 0 the cell
-# runs on while it is descheduled: at 20 mm/s, with other work beside, the reading that stopped the arm
-# was 25 N once and a protective stop (151 N) another time. Slowly, a late reaction stays far below it.
-TOUCH_SPEED = 0.005
 
 
 def say(text):
@@ -157,23 +153,6 @@ class PhysicsCellTest(unittest.TestCase):
         self.assertEqual(cell.gripper.status.gOBJ, 2, 'the can was lost')
         self.assertLess(slip, 0.005)
         cell.put_down()
-
-    # -- guarded touch, as shipped -----------------------------------------------------
-
-    def test_5_guarded_touch_stops_and_reads_the_contact_force(self):
-        touch = guarded_touch.GuardedTouch(rospy, say=say)
-        touch.start(*guarded_touch.START_XY)
-        figures = touch.touch(TOUCH_SPEED, 10.0, timeout=60.0)
-        contact = np.array(self.truth()['contact_force'])
-        touch.report(figures)
-        say('MuJoCo\'s contact force on the robot meanwhile: %.2f N (%s)' % (np.linalg.norm(contact),
-                                                                           np.round(contact, 2).tolist()))
-        touch.back_off(TOUCH_SPEED)
-        self.assertGreaterEqual(figures['detected_force'], 10.0)
-        self.assertGreater(figures['steady_force'], 0.5, 'the tool does not rest on the table')
-        self.assertAlmostEqual(figures['steady_force'], np.linalg.norm(contact),
-                               delta=CONTACT_TOLERANCE * np.linalg.norm(contact) + 0.02)
-        self.assertLess(np.linalg.norm(self.truth()['contact_force']), 0.5, 'the tool did not lift off')
 
 
 if __name__ == '__main__':
