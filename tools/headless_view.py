@@ -26,11 +26,11 @@ from PIL import Image
 
 PACKAGE = 'ur3_ft_gripper_description'
 LAUNCH_FILE = 'view_ur3_ft_gripper.launch'
-# xdotool --name patterns: RViz titles its window "<config file> - RViz", and
-# joint_state_publisher_gui titles its window after its node name.
 # Starts of the view before a start-up crash of RViz is an error: two crashes in a row happen (a fresh
 # root under load), three have not been seen.
 RVIZ_STARTS = 3
+# xdotool --name patterns: RViz titles its window "<config file> - RViz", and
+# joint_state_publisher_gui titles its window after its node name.
 RVIZ_WINDOW = ' - RViz$'
 SLIDERS_WINDOW = '^Node: .*joint_state_publisher_gui$'
 # Pixels that are neither grid nor background and whose red exceeds their
