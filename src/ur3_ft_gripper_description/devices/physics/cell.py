@@ -52,9 +52,12 @@ from .world import WorldError, empty_world, overlap_problem
 # Contacts at the start up to this deep are contact, not overlap (m): MuJoCo's
 # soft contacts let resting bodies sink a fraction of a millimetre.
 OVERLAP_TOLERANCE = 0.001
-# The fingers count as stopped when slower than this (rad/s) for STALL_TIME (s).
-STALL_SPEED = 0.02
-STALL_TIME = 0.02
+# The fingers count as stopped once finger_joint has stayed within STALL_TRAVEL (rad) of one angle for
+# STALL_TIME (s). A travel over a window, not a speed: under MuJoCo 3.2.3 a held can rocks in the pads at
+# 30 to 40 Hz (up to 2.5 mrad peak to peak, at up to 0.4 rad/s) and goes nowhere. The slowest close (rSP 0,
+# 30 mm/s: about 0.15 rad/s) leaves the band in a third of STALL_TIME.
+STALL_TRAVEL = 0.005
+STALL_TIME = 0.1
 
 MOVING, AT_TARGET, ON_OBJECT = 'moving', 'at_target', 'on_object'
 
@@ -226,7 +229,7 @@ class Cell(object):
             self.grip_force_range = (float(gripper['grip_force_min']), float(gripper['grip_force_max']))
             self.finger_tolerance = float(gripper['target_tolerance'])
             self._finger = dict(target=None, ramp=None, angle=None, speed=0.0,
-                                force=self.grip_force_range[0], closing=False, stalled=0.0)
+                                force=self.grip_force_range[0], closing=False, stalled=0.0, still_at=0.0)
 
         # -- the world's objects
         self._objects = {solid.name: m.body(solid.name).id for solid in self.world.objects}
@@ -372,9 +375,9 @@ class Cell(object):
         gripper = self._has_gripper
         if gripper:
             finger, ramping = self._finger, self._finger_ramping
-            still, stalled, force = self._finger_still, finger['stalled'], finger['force']
-            qpos, qvel = self._qpos_view, self._qvel_view
-            finger_qpos, finger_dof = self._finger_qpos, self._finger_dof
+            still, force = self._finger_still, finger['force']
+            stalled, still_at = finger['stalled'], finger['still_at']
+            qpos, finger_qpos = self._qpos_view, self._finger_qpos
             cap = self._finger_torque_range_view
             # The rates' table segment the fingers are in: gripping, they stay in it for many timesteps.
             segment = self._finger_segment
@@ -412,10 +415,11 @@ class Cell(object):
                 self._stop(math.sqrt(fx * fx + fy * fy + fz * fz))
                 following = False
             if gripper:
-                if -STALL_SPEED < qvel[finger_dof] < STALL_SPEED:  # abs(): a call
+                angle = qpos[finger_qpos]
+                if -STALL_TRAVEL < angle - still_at < STALL_TRAVEL:  # abs(): a call
                     stalled += timestep
                 else:
-                    stalled = 0.0
+                    still_at, stalled = angle, 0.0
             if count == next_sample:
                 self._keep_wrench_sample(count)
                 next_sample += self._sample_every
@@ -423,7 +427,7 @@ class Cell(object):
         self._steps, self._next_sample = count, next_sample
         self._contact_force_sums = (sum_x, sum_y, sum_z)
         if gripper:
-            finger['stalled'], self._finger_still = stalled, still
+            finger['stalled'], finger['still_at'], self._finger_still = stalled, still_at, still
             self._finger_segment, self._finger_ramping = segment, ramping
         if following:
             self._reference_view[:] = self._next_reference_view
@@ -578,7 +582,7 @@ class Cell(object):
         state['speed'] = max(float(speed), 0.0)
         state['force'] = min(max(float(force), self.grip_force_range[0]), self.grip_force_range[1])
         state['closing'] = state['target'] < current
-        state['stalled'] = 0.0
+        state['stalled'], state['still_at'] = 0.0, float(self.data.qpos[self._finger_qpos])
         self._finger_ramping = True
 
     def _rate(self, angle):
