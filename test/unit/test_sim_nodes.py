@@ -404,6 +404,41 @@ def test_closing_on_the_object_stops_at_its_width_with_gobj_2():
     assert run_for(g, 1.0)['gOBJ'] == 3
 
 
+class RockingFingers(gripper_sim.KinematicFingers):
+    """Fingers on a part that rocks them, as a held can does under MuJoCo 3.2.3: once on it, every other
+    cycle they read as moving, up to a count further closed; drop() lets the part slip out."""
+
+    def __init__(self, spec, object_width):
+        super(RockingFingers, self).__init__(spec, object_width)
+        self.cycles_on_it = 0
+
+    def advance(self, dt):
+        motion = super(RockingFingers, self).advance(dt)
+        if motion != gripper_sim.ON_OBJECT:
+            return motion
+        self.cycles_on_it += 1
+        self.position = self.object_position + self.cycles_on_it % 2
+        return gripper_sim.MOVING if self.cycles_on_it % 2 else motion
+
+    def drop(self):
+        self.object_position, self.motion = None, gripper_sim.MOVING
+
+
+def test_a_part_rocking_in_the_fingers_stays_held_and_one_that_slips_out_is_lost():
+    fingers = RockingFingers(SPEC, 0.070)
+    g, _, _ = active(fingers=fingers)
+    g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=255))
+    run_for(g, 1.0)
+    held = [run_for(g, 0.02) for _ in range(50)]
+    assert fingers.cycles_on_it > 50
+    assert {(s['gOBJ'], s['gCU']) for s in held} == {(2, 80)}
+    on_it = SPEC.scale.position(0.070)
+    assert all(on_it - 0.5 <= s['gPO'] <= on_it + 1.5 for s in held), held
+    fingers.drop()  # the fingers close on at 250 mm/s: 3 mm on, within a cycle
+    assert run_for(g, 0.02)['gOBJ'] == 0
+    assert (run_for(g, 1.0)['gOBJ'], g.status()['gPO']) == (3, 230)
+
+
 def test_auto_release_overrides_opens_slowly_and_needs_a_reset():
     g, _, _ = active(object_width=0.070)
     g.set_command(command(rACT=1, rGTO=1, rPR=255, rSP=255))

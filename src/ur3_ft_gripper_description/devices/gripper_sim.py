@@ -19,8 +19,10 @@ Instruction Manual (section 4, "Control") describes them:
   gPR echoes rPR, gPO is the actual position, gCU a plausible current
   (moving, or holding with a force from rFR; see config/sim_devices.yaml).
 * gOBJ: 0 while moving, 2 when closing stopped on an object (1 when opening
-  did), 3 at the requested position (also once a held object is lost). The
-  manual says to ignore gOBJ while gGTO is 0; after a stop it reads 3 here,
+  did), 3 at the requested position (also once a held object is lost). An
+  object stays detected until the next motion request, or until the fingers
+  travel OBJECT_LOST_TRAVEL on towards the request: the object slipped out
+  (the manual's gOBJ 3 is "object lost or dropped"). The manual says to ignore gOBJ while gGTO is 0; after a stop it reads 3 here,
   so that a client waiting for the fingers to stop sees it.
 * rATR 1 (with rACT 1) starts the automatic release: it overrides every
   other request, opens slowly (min_speed) to the mechanical end (gPO 0) with
@@ -62,6 +64,10 @@ from ur3_ft_gripper_description.devices.physics import link
 
 # A kind of nonsense register value is warned about at most once per this many seconds.
 RATE_LIMIT = 10.0
+# Fingers that stopped on an object and then travel this far (m) on towards the request have lost it.
+# Not published: the simulation's choice, beyond what the physics pads move on a held part (the pads
+# sink up to 2 mm into it as they squeeze; a can rocking in them moves them 0.5 mm).
+OBJECT_LOST_TRAVEL = 0.003
 
 FAULT_NONE = 0x00
 FAULT_ACTION_DELAYED = 0x05       # activation must be completed prior to action
@@ -179,8 +185,8 @@ class PhysicsFingers(object):
         return self._show(self.client.finger()[1])
 
     def squeeze(self):
-        if self.motion != ON_OBJECT:
-            return 0.0
+        # Asked while the register machine holds an object: the drive's force, also while a held part
+        # rocks the fingers (the cell then says MOVING).
         return min(self.state['grip_force'] / self.force_range[1], 1.0)
 
 
@@ -201,6 +207,7 @@ class RegisterGripper(object):
         self.object_status = 0
         self.moving = False
         self.holding = False
+        self.held_at = None  # gPO (counts) where the fingers stopped on the object they hold
         self.closing = False
 
     @property
@@ -301,11 +308,17 @@ class RegisterGripper(object):
             return
         if motion == ON_OBJECT and self.moving:
             self.moving, self.holding, self.object_status = False, True, 2 if self.closing else 1
+            self.held_at = self.position
         elif motion == AT_TARGET:
             # Arrived, or a held object was lost and the fingers went on to the request.
             self.moving, self.holding, self.object_status = False, False, 3
-        elif motion == MOVING and self.holding:
+        elif motion == MOVING and self.holding and self._lost_hold():
             self.moving, self.holding, self.object_status = True, False, 0
+
+    def _lost_hold(self):
+        """Whether the holding fingers have travelled OBJECT_LOST_TRAVEL on towards the request."""
+        on = self.position - self.held_at if self.closing else self.held_at - self.position
+        return on > OBJECT_LOST_TRAVEL * self.spec.scale.counts_per_metre
 
     # -- status --------------------------------------------------------------
 
