@@ -52,27 +52,26 @@ class CellError(RuntimeError):
 
 def wait_until(rospy, condition, what, timeout, step=0.01):
     """The first true value of condition(), or CellError naming `what` after `timeout` s of ROS time."""
-    end = rospy.get_time() + timeout
-    while True:
-        value = condition()
-        if value:
-            return value
-        if rospy.get_time() > end:
-            raise CellError('no %s within %g s' % (what, timeout))
-        rospy.sleep(step)
+    return _first_true(condition, what, timeout, step, rospy.get_time, rospy.sleep, rospy.is_shutdown)
 
 
 def wait_until_up(rospy, condition, what, timeout, step=0.02):
     """The first true value of condition(), or CellError naming `what` after `timeout` s of wall-clock time:
     for a node of the driver to be there, which takes the same wall time at any real-time factor."""
-    end = time.monotonic() + timeout
+    return _first_true(condition, what, timeout, step, time.monotonic, time.sleep, rospy.is_shutdown)
+
+
+def _first_true(condition, what, timeout, step, now, sleep, shut_down):
+    """condition()'s first true value, polled every `step` s of the clock `now`/`sleep`; CellError naming
+    `what` once `timeout` s have passed on that clock or the node shuts down."""
+    end = now() + timeout
     while True:
         value = condition()
         if value:
             return value
-        if time.monotonic() > end or rospy.is_shutdown():
+        if now() > end or shut_down():
             raise CellError('no %s within %g s' % (what, timeout))
-        time.sleep(step)
+        sleep(step)
 
 
 class ToolKinematics(object):

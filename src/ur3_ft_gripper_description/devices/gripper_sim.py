@@ -22,8 +22,9 @@ Instruction Manual (section 4, "Control") describes them:
   did), 3 at the requested position (also once a held object is lost). An
   object stays detected until the next motion request, or until the fingers
   travel OBJECT_LOST_TRAVEL on towards the request: the object slipped out
-  (the manual's gOBJ 3 is "object lost or dropped"). The manual says to ignore gOBJ while gGTO is 0; after a stop it reads 3 here,
-  so that a client waiting for the fingers to stop sees it.
+  (the manual's gOBJ 3 is "object lost or dropped"). The manual says to
+  ignore gOBJ while gGTO is 0; after a stop it reads 3 here, so that a
+  client waiting for the fingers to stop sees it.
 * rATR 1 (with rACT 1) starts the automatic release: it overrides every
   other request, opens slowly (min_speed) to the mechanical end (gPO 0) with
   gFLT 0x0B, then reports gFLT 0x0F and moves no more until a reset (rACT 0).
