@@ -2,7 +2,10 @@
 import runpy
 import sys
 
-from python_qt_binding.QtWidgets import QSlider
+try:
+    from python_qt_binding.QtWidgets import QSlider
+except ImportError:  # Debian 13 has no python_qt_binding: its joint_state_publisher_gui imports PyQt5 itself
+    from PyQt5.QtWidgets import QSlider
 
 DEBIAN_EXECUTABLE = '/usr/lib/joint_state_publisher_gui/joint_state_publisher_gui'
 
