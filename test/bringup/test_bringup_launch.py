@@ -18,6 +18,7 @@ import roslaunch.config
 import roslaunch.xmlloader
 
 from ur3_ft_gripper_description import kinematics
+from ur3_ft_gripper_testing.rostest_helpers import free_port
 
 PACKAGE = 'ur3_ft_gripper_description'
 PACKAGE_DIR = rospkg.RosPack().get_path(PACKAGE)
@@ -235,7 +236,7 @@ def test_every_arg_has_doc_and_the_required_ones_no_default(launch_file, require
 
 def roslaunch_run(*command, env=None):
     """A real roslaunch on an unused master port: it must stop while loading."""
-    env = dict(env or os.environ, ROS_MASTER_URI='http://localhost:11397')
+    env = dict(env or os.environ, ROS_MASTER_URI='http://localhost:%d' % free_port())
     return subprocess.run(['roslaunch'] + list(command), stdout=subprocess.PIPE,
                           stderr=subprocess.PIPE, universal_newlines=True, env=env, timeout=180)
 

@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from ur3_ft_gripper_testing.model import UR_CONFIG, assert_one_line_error, run_expand
+from ur3_ft_gripper_testing.rostest_helpers import free_port
 
 
 def kinematics_without(tmp_path, segment):
@@ -118,7 +119,7 @@ def test_load_launch_with_bad_input_stops_before_setting_anything(case, tmp_path
     # master port: it must stop while loading, before it starts a master or sets
     # a parameter (no half-loaded model), with the one error line and no traceback.
     args, words = _bad_launch_args(case, tmp_path)
-    env = dict(os.environ, ROS_MASTER_URI='http://localhost:11391')
+    env = dict(os.environ, ROS_MASTER_URI='http://localhost:%d' % free_port())
     launch = 'load_ur_ft_gripper.launch' if case == 'unknown ur_type' else 'load_ur3_ft_gripper.launch'
     run = subprocess.run(['roslaunch', 'ur3_ft_gripper_description', launch] + args,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
