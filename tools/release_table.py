@@ -28,7 +28,8 @@ the table it `extends`, then in common.yaml; the first that has it answers
     release_table.py TABLE leg.pins  a key of a mapping
     release_table.py legs            "python table" a line, for the tables that have a leg
 
-Exit status 0, or 2 with one line on a table or key that does not exist.
+Exit status 0 (a known key that no table sets prints nothing), or 2 with one line on a table
+or key that does not exist.
 """
 import os
 import sys
@@ -65,6 +66,8 @@ def chain(name):
 
 def lookup(name, key):
     head, _, rest = key.partition('.')
+    if head not in KEYS:
+        raise LookupError('no key %s (known: %s)' % (head, ', '.join(KEYS)))
     for table in chain(name):
         if head in table:
             value = table[head]
