@@ -3,10 +3,11 @@
 Noetic runs on Ubuntu 20.04 (focal), ROS-O (ROS_DISTRO=one) on 22.04 (jammy)
 and 24.04 (noble). A key resolves on a release when it is a rosdep key with an
 entry for that release (or a generic ubuntu one) in rosdistro's base.yaml or
-python.yaml, a package that Noetic releases (noetic/distribution.yaml; ROS-O
-builds the same repositories, and its own rosdep file is not among the upstream
-data), or a package of a repository pinned in repos/robotiq-*.repos, which users
-build in their catkin workspace (doc/install.md). package.xml's `condition`
+python.yaml; on focal a package that Noetic releases (noetic/distribution.yaml),
+on jammy and noble one whose Noetic repository ROS-O also builds (its build list,
+test/data/ros_one_repositories.yaml: ROS-O's own rosdep file is not among the
+upstream data); or a package of a repository pinned in repos/robotiq-*.repos,
+which users build in their catkin workspace (doc/install.md). package.xml's `condition`
 attributes are evaluated with that release's ROS_DISTRO, as rosdep does.
 The rosdistro files come from $UR3_FT_GRIPPER_ROSDISTRO (tools/quickstart sets it);
 nothing is downloaded.
@@ -67,12 +68,34 @@ def on_release(entry, release):
 
 
 def noetic_packages():
-    packages = set()
+    """{package: the last part of its source repository's URL} for every package Noetic releases."""
+    packages = {}
     for name, repo in load('noetic-distribution.yaml')['repositories'].items():
         release = repo.get('release') or {}
         if release.get('version'):
-            packages.update(release.get('packages', [name]))
+            url = (repo.get('source') or release).get('url', '')
+            for package in release.get('packages', [name]):
+                packages[package] = url.rstrip('/').rsplit('/', 1)[-1].replace('.git', '')
     return packages
+
+
+@functools.lru_cache(maxsize=None)
+def ros_one():
+    with open(os.path.join(PACKAGE_DIR, 'test', 'data', 'ros_one_repositories.yaml')) as f:
+        return yaml.safe_load(f)
+
+
+def released(key, release):
+    """Whether the ROS distribution of Ubuntu `release` releases the package `key`."""
+    repository = noetic_packages().get(key)
+    if repository is None:
+        return False
+    if RELEASES[release] is NOETIC:
+        return True
+    built = {name.lower() for name in ros_one()['repositories']}
+    if release == 'noble' and repository in ros_one()['not_on_noble']:
+        return False
+    return repository.lower() in built
 
 
 def user_repositories():
@@ -96,7 +119,7 @@ def resolves(key, release):
     rules = dict(load('base.yaml'), **load('python.yaml'))
     if key in rules:
         return on_release(rules[key], release)
-    return key in noetic_packages() or from_user_repository(key)
+    return released(key, release) or from_user_repository(key)
 
 
 @pytest.mark.parametrize('release, key', [(release, key) for release, environment in RELEASES.items()
@@ -112,6 +135,11 @@ def test_key_resolves_on_each_release(release, key):
     ('python3-rospkg', 'noble', True),    # python.yaml: ubuntu: [python3-rospkg]
     ('rospkg', 'focal', False),           # a Python module, not a rosdep key
     ('xacro', 'jammy', True),             # released in Noetic, rebuilt by ROS-O
+    ('ur_dashboard_msgs', 'noble', True),  # Universal_Robots_ROS_Driver, built by ROS-O
+    ('canopen_master', 'focal', True),    # ros_canopen: released in Noetic ...
+    ('canopen_master', 'jammy', False),   # ... and not in ROS-O's build list
+    ('gazebo_ros', 'jammy', True),        # gazebo_ros_pkgs: built by ROS-O for jammy ...
+    ('gazebo_ros', 'noble', False),       # ... a known failure on noble
     ('robotiq_ft_sensor', 'noble', True),  # not released: built from repos/robotiq-*.repos
     ('python3-pymodbus', 'jammy', True),  # ubuntu: {'*': ...}
     ('python3-transforms3d', 'focal', True),  # focal: pip, the others: '*'
