@@ -21,6 +21,7 @@ the table it `extends`, then in common.yaml; the first that has it answers
     message_packages, ros_message_packages   generated from upstream's definitions
     repos, ros_repos repos/<name>.repos to clone
     overlays         tools/<folder> of packages that fill the ROS's gaps (tools/debian)
+    setup_seconds    {step: seconds} each set-up step takes, for the time left it announces
     leg              {python, pins, build_pins, pip_options}: the release's Python leg
 
     release_table.py TABLE KEY       the value: a list one item a line, a mapping
@@ -39,7 +40,7 @@ import yaml
 FOLDER = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'releases')
 KEYS = ('name', 'quickstart', 'os_release', 'ros_setup', 'ros_install', 'apt', 'ros_apt', 'release_apt', 'programs',
         'ros_programs', 'python_modules', 'venv', 'ros_venv', 'physics', 'consumers', 'consumers_apt', 'consumers_absent',
-        'message_packages', 'ros_message_packages', 'repos', 'ros_repos', 'overlays', 'leg', 'extends')
+        'message_packages', 'ros_message_packages', 'repos', 'ros_repos', 'overlays', 'setup_seconds', 'leg', 'extends')
 
 
 def load(name):
