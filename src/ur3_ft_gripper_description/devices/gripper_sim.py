@@ -403,8 +403,10 @@ def run(rospy):
             return 1
         fingers = PhysicsFingers(client, spec)
     gripper = RegisterGripper(spec, rospy.logwarn, object_width=width, initial_position=initial, fingers=fingers)
+    # Five seconds of statuses at 50 Hz, as the FT 300 keeps five of its 100 Hz: on a simulated clock
+    # faster than real time a subscriber starved for a moment gets every tick late, not a gap.
     publisher = rospy.Publisher('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
-                                queue_size=100)
+                                queue_size=256)
 
     lock = threading.Lock()  # callbacks run in rospy's threads, the loop in this one
 
