@@ -56,7 +56,7 @@ BOX = """
   - name: held
     shape: box
     size: [0.06, 0.05, 0.12]
-    pose: [%r, %r, 0.06]
+    pose: [%s, 0.06]
     mass: 1.0
     friction: 0.5
 """
@@ -86,6 +86,7 @@ def build(folder, ur_type='ur3'):
     from ur3_ft_gripper_description.devices.physics.cell import Cell
     from ur3_ft_gripper_description.devices.physics.world import load_world
     from ur3_ft_gripper_description.model import description, export, mjcf
+    from ur3_ft_gripper_description.number_text import number_list
 
     mappings = export.model_mappings(ur_type=ur_type)
     doc = description.expand_model(mappings)
@@ -95,7 +96,7 @@ def build(folder, ur_type='ur3'):
     tcp = model.transform(model.root(), 'gripper_tcp', dict(zip(ARM_JOINTS, start)))[:3, 3]
     with open(os.path.join(description.package_path('ur3_ft_gripper_description'), 'config', 'worlds',
                            'default.yaml')) as f:
-        world_text = f.read() + BOX % (tcp[0], tcp[1])
+        world_text = f.read() + BOX % number_list(tcp[:2])
     world_path = os.path.join(folder, 'world.yaml')
     with open(world_path, 'w') as f:
         f.write(world_text)

@@ -95,6 +95,8 @@ def cycle(driver, index, problems):
     from geometry_msgs.msg import Twist
     from std_msgs.msg import Float64MultiArray, String
 
+    from ur3_ft_gripper_description.number_text import number_list
+
     def check(ok, what):
         if not ok:
             problems.append('cycle %d: %s' % (index, what))
@@ -111,7 +113,7 @@ def cycle(driver, index, problems):
     check(driver.add_to_log('soak cycle %d' % index).success, 'dashboard add_to_log')
     target = list(HOME)
     target[0] += 0.3 if on else -0.3
-    driver.script.publish(String(data='movej([%s])' % ', '.join(repr(v) for v in target)))
+    driver.script.publish(String(data='movej([%s])' % number_list(target)))
     arrived = wait(lambda: driver.positions and max(abs(a - b) for a, b in zip(driver.positions, target)) < 1e-6)
     check(arrived, 'movej to %s' % target)
     check(wait(lambda: driver.program_running is False), 'the script program replaces External Control')

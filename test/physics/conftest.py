@@ -17,6 +17,7 @@ from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices.physics import MissingMuJoCo, require_mujoco
 from ur3_ft_gripper_description.devices.physics.world import load_world
 from ur3_ft_gripper_description.model import description, export, mjcf
+from ur3_ft_gripper_description.number_text import number, number_list
 from ur3_ft_gripper_testing.physics import ARM_JOINTS, START, TABLE
 # test_cell.py and test_link.py still take these from here, while their move to
 # ur3_ft_gripper_testing.physics is pending; with test/unit in the same session this works
@@ -70,9 +71,9 @@ def between_pads(pad_centre):
     """between_pads(width, ...) -> a world with an object standing on the table between the open pads."""
     def world(width, height=0.12, mass=1.0, depth=0.06, shape='box', quat_yaw=0.0, mesh=None):
         if shape == 'box':
-            size = 'size: [%r, %r, %r]' % (depth, width, height)
+            size = 'size: [%s]' % number_list((depth, width, height))
         elif shape == 'cylinder':
-            size = 'size: [%r, %r]' % (width, height)
+            size = 'size: [%s]' % number_list((width, height))
         else:
             size = 'mesh: %s' % mesh
         z = height / 2.0 if shape != 'mesh' else 0.0
@@ -81,8 +82,8 @@ objects:
   - name: held
     shape: %s
     %s
-    pose: [%r, %r, %r, 0, 0, %r]
-    mass: %r
+    pose: [%s, 0, 0, %s]
+    mass: %s
     friction: 0.5
-""" % (shape, size, pad_centre[0], pad_centre[1], z, quat_yaw, mass)
+""" % (shape, size, number_list((pad_centre[0], pad_centre[1], z)), number(quat_yaw), number(mass))
     return world

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from ur3_ft_gripper_description.devices.physics.cell import AT_TARGET, ON_OBJECT
+from ur3_ft_gripper_description.number_text import number_list
 from ur3_ft_gripper_testing.grasp import GAP_TOLERANCE
 from ur3_ft_gripper_testing.physics import START, Arm, close_on, in_gripper
 
@@ -22,7 +23,7 @@ def hexagonal_prism(path, across_flats, height):
     """An OBJ file of a hexagonal prism standing on its base, two of its faces `across_flats` apart along y."""
     radius = across_flats / math.sqrt(3.0)
     ring = [(radius * math.cos(k * math.pi / 3.0), radius * math.sin(k * math.pi / 3.0)) for k in range(6)]
-    lines = ['v %r %r %r' % (x, y, z) for z in (0.0, height) for x, y in ring]
+    lines = ['v %s' % number_list((x, y, z), ' ') for z in (0.0, height) for x, y in ring]
     lines += ['f 1 %d %d' % (k + 1, k) for k in range(2, 6)]   # bottom, facing down
     lines += ['f 7 %d %d' % (k + 6, k + 7) for k in range(2, 6)]    # top, facing up
     for k in range(1, 7):

@@ -3,13 +3,14 @@ import numpy as np
 import pytest
 
 from ur3_ft_gripper_description.devices.physics.world import WorldError, load_world
+from ur3_ft_gripper_description.number_text import number_list
 from ur3_ft_gripper_testing.physics import START, TABLE
 
 BOX = """
   - name: %s
     shape: box
     size: [0.05, 0.05, 0.1]
-    pose: [%r, %r, %r]
+    pose: [%s]
     mass: 0.2
     friction: 0.5
 """
@@ -20,7 +21,7 @@ def objects(*entries):
 
 
 def box(name='block', x=0.3, y=-0.15, z=0.05):
-    return BOX % (name, x, y, z)
+    return BOX % (name, number_list((x, y, z)))
 
 
 # (id, world text, words the line must hold): the line names the entry and the field.

@@ -37,6 +37,7 @@ from ur_msgs.srv import GetRobotSoftwareVersion, SetIO, SetIORequest, SetSpeedSl
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import ft300_sim, wrench_model
 from ur3_ft_gripper_description.model.names import PADS
+from ur3_ft_gripper_description.number_text import number_list
 from ur3_ft_gripper_testing import cpu_load, rostest_helpers
 from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, wait_for
 from ur3_ft_gripper_testing.ur_driver import AWAY, COMMANDING, HOME, HW, JOINTS
@@ -410,7 +411,7 @@ class RobotTest(DriverTestBase):
         target[0] += 1.0
         recorder = rostest_helpers.Recorder('joint_states', JointState)
         rostest_helpers.wait_for_subscribers(self.driver.script)
-        self.driver.script.publish(String(data='movej([%s])' % ', '.join('%r' % v for v in target)))
+        self.driver.script.publish(String(data='movej([%s])' % number_list(target)))
         wait_for(lambda: np.allclose(arm_positions(self.prefix)[0], target, atol=1e-6), 'movej reaches its target')
         pan = self.prefix + 'shoulder_pan_joint'
         samples = [(m.header.stamp.to_sec(), m.position[m.name.index(pan)]) for m in recorder.since(0.0)
@@ -430,7 +431,7 @@ class RobotTest(DriverTestBase):
                                           '  movel(pose_add(get_actual_tcp_pose(), p[0, 0, 0.03, 0, 0, 0]), '
                                           'a=0.5, v=0.1)\n'
                                           '  movej([%s], a=1.4, v=1.05)\n'
-                                          'end\n' % ', '.join('%r' % v for v in AWAY)))
+                                          'end\n' % number_list(AWAY)))
         wait_for(lambda: not rospy.wait_for_message(HW + 'robot_program_running', Bool, TIMEOUT).data,
                    'the script replaces the External Control program')
         wait_for(lambda: np.allclose(arm_positions(self.prefix)[0], AWAY, atol=1e-3), 'movej reaches its target')

@@ -25,6 +25,7 @@ from ur3_ft_gripper_description.devices.ur_arm.cartesian import Waypoint
 from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
 from ur3_ft_gripper_description.devices.ur_arm.trajectory import JointTolerance, Point
 from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_description.number_text import number, number_list
 
 JOINTS = ['shoulder_pan_joint', 'shoulder_lift_joint', 'elbow_joint', 'wrist_1_joint', 'wrist_2_joint',
           'wrist_3_joint']
@@ -362,7 +363,7 @@ def test_movej_without_a_and_v_takes_the_manuals_default_profile(arm):
     # the ramps' v^2/a: accelerate, cruise at v, decelerate: 1/v + v/a seconds.
     target = list(START)
     target[0] += 1.0
-    arm.script_command('movej([%s])' % ', '.join(repr(v) for v in target))
+    arm.script_command('movej([%s])' % number_list(target))
     took = run_until(arm, lambda: not arm.script_running, 5.0)
     assert took == pytest.approx(1.0 / 1.05 + 1.05 / 1.4, abs=2 * DT)
     assert np.allclose(arm.motion.position, target)
@@ -373,7 +374,7 @@ def test_movej_to_a_pose_and_sleep(arm):
     pose = tool_pose(arm)
     pose[:3, 3] += [0.0, 0.05, 0.0]
     ur_pose = tuple(pose[:3, 3]) + tuple(rotation_vector(pose[:3, :3]))
-    arm.script_command('def p():\n  sleep(0.5)\n  movej(p[%r, %r, %r, %r, %r, %r], t=2)\nend' % ur_pose)
+    arm.script_command('def p():\n  sleep(0.5)\n  movej(p[%s], t=2)\nend' % number_list(ur_pose))
     run(arm, 0.45)
     assert np.array_equal(arm.motion.position, START)  # still sleeping
     took = run_until(arm, lambda: not arm.script_running, 5.0)
@@ -383,7 +384,8 @@ def test_movej_to_a_pose_and_sleep(arm):
 
 def test_scripts_the_robot_would_not_compile_change_nothing(arm):
     for script, line in (('movej([0, 0, 0]', 1), ('def p():\n  sleep(1)\n', 2),
-                         ('sec s():\n  movej(%r)\nend' % START, 2), ('def p():\n  x = 1\n  frobnicate(x)\nend', 3)):
+                         ('sec s():\n  movej([%s])\nend' % number_list(START), 2),
+                         ('def p():\n  x = 1\n  frobnicate(x)\nend', 3)):
         arm.script_command(script)
         level, text = arm.take_messages()[-1]
         assert level == arm_core.ERROR and 'would not compile' in text and '\n' not in text
@@ -522,10 +524,10 @@ def test_the_snapshot_is_what_the_driver_publishes(arm):
 def square_program(r):
     """Three movel around three corners of a 4 cm square in the tool's plane, each blended with `r`."""
     return ('def square():\n  start = get_actual_tcp_pose()\n'
-            '  movel(pose_add(start, p[0.04, 0, 0, 0, 0, 0]), a=0.5, v=0.1, r=%r)\n'
-            '  movel(pose_add(start, p[0.04, 0.04, 0, 0, 0, 0]), a=0.5, v=0.1, r=%r)\n'
+            '  movel(pose_add(start, p[0.04, 0, 0, 0, 0, 0]), a=0.5, v=0.1, r=%s)\n'
+            '  movel(pose_add(start, p[0.04, 0.04, 0, 0, 0, 0]), a=0.5, v=0.1, r=%s)\n'
             '  movel(pose_add(start, p[0, 0.04, 0, 0, 0, 0]), a=0.5, v=0.1)\n'
-            'end' % (r, r))
+            'end' % (number(r), number(r)))
 
 
 def test_three_blended_moves_run_through_when_their_blends_do_not_overlap(arm):

@@ -34,6 +34,7 @@ import numpy as np
 import yaml
 
 from ur3_ft_gripper_description.model.names import GRIPPER_BASE, child_elements, package_path
+from ur3_ft_gripper_description.number_text import number, number_list
 
 # Parts whose upstream inertials are replaced, by the link names the upstream
 # macros give (before the prefix); the first link of each part anchors the prefix.
@@ -61,13 +62,13 @@ def load_table(path=None):
 def _inertial_element(doc, mass, com, inertia):
     inertial = doc.createElement('inertial')
     origin = doc.createElement('origin')
-    origin.setAttribute('xyz', ' '.join(repr(float(v)) for v in com))
+    origin.setAttribute('xyz', number_list(com, ' '))
     origin.setAttribute('rpy', '0 0 0')
     mass_element = doc.createElement('mass')
-    mass_element.setAttribute('value', repr(float(mass)))
+    mass_element.setAttribute('value', number(mass))
     inertia_element = doc.createElement('inertia')
     for key in INERTIA_KEYS:
-        inertia_element.setAttribute(key, repr(float(inertia[key])))
+        inertia_element.setAttribute(key, number(inertia[key]))
     for child in (origin, mass_element, inertia_element):
         inertial.appendChild(child)
     return inertial

@@ -57,6 +57,7 @@ from transforms3d.quaternions import mat2quat
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description, export
 from ur3_ft_gripper_description.model.names import FINGER_JOINT, FLANGE, PADS
+from ur3_ft_gripper_description.number_text import number, number_list
 
 EXCLUDED_REASONS = ('Adjacent', 'Default', 'Always')
 VELOCITY_SUFFIX = '_velocity'
@@ -82,7 +83,7 @@ def ft_sensor_frame(path=None):
 
 
 def _numbers(values):
-    return ' '.join(repr(round(float(v), 12) + 0.0) for v in values)
+    return number_list((round(float(v), 12) + 0.0 for v in values), ' ')
 
 
 def _pose_attributes(element, pose):
@@ -167,8 +168,8 @@ class MjcfWriter(object):
                     attributes['range'] = _numbers((joint.limit.lower, joint.limit.upper))
                     attributes['limited'] = 'true'
                 if joint.dynamics is not None:
-                    attributes['damping'] = repr(float(joint.dynamics.damping or 0.0))
-                    attributes['frictionloss'] = repr(float(joint.dynamics.friction or 0.0))
+                    attributes['damping'] = number(joint.dynamics.damping or 0.0)
+                    attributes['frictionloss'] = number(joint.dynamics.friction or 0.0)
                 attributes.update(self.drive_attributes(joint))
                 self.element(body, 'joint', **attributes)
         inertial = link.inertial
@@ -177,7 +178,7 @@ class MjcfWriter(object):
             tensor = np.array([[i.ixx, i.ixy, i.ixz], [i.ixy, i.iyy, i.iyz], [i.ixz, i.iyz, i.izz]])
             pose = kinematics.pose_matrix(inertial.origin)
             tensor = pose[:3, :3].dot(tensor).dot(pose[:3, :3].T)  # into the body frame
-            self.element(body, 'inertial', pos=_numbers(pose[:3, 3]), mass=repr(float(inertial.mass)),
+            self.element(body, 'inertial', pos=_numbers(pose[:3, 3]), mass=number(inertial.mass),
                          fullinertia=_numbers([tensor[0, 0], tensor[1, 1], tensor[2, 2],
                                                tensor[0, 1], tensor[0, 2], tensor[1, 2]]))
         for k, collision in enumerate(link.collisions):
@@ -190,7 +191,7 @@ class MjcfWriter(object):
             elif hasattr(geometry, 'length'):
                 attributes.update(type='cylinder', size=_numbers((geometry.radius, geometry.length / 2.0)))
             elif hasattr(geometry, 'radius'):
-                attributes.update(type='sphere', size=repr(float(geometry.radius)))
+                attributes.update(type='sphere', size=number(geometry.radius))
             if link_name in self.pads:
                 attributes.update(self.pad_attributes())
             geom = self.element(body, 'geom', **attributes)
@@ -205,10 +206,10 @@ class MjcfWriter(object):
     def drive_attributes(self, joint):
         """What a joint's drive adds: an arm joint's armature, gravity compensation and effort limit."""
         if joint.name == self.finger:
-            return dict(armature=repr(float(self.figures['gripper']['finger_armature'])))
+            return dict(armature=number(self.figures['gripper']['finger_armature']))
         if joint.name not in self.arm_joints:
             return {}
-        attributes = dict(armature=repr(float(self.figures['arm']['armature'])), actuatorgravcomp='true')
+        attributes = dict(armature=number(self.figures['arm']['armature']), actuatorgravcomp='true')
         if joint.limit is not None and joint.limit.effort:
             attributes['actuatorfrcrange'] = _numbers((-joint.limit.effort, joint.limit.effort))
         return attributes
@@ -221,9 +222,9 @@ class MjcfWriter(object):
 
     def option(self, root):
         solver = self.figures['solver']
-        option = self.element(root, 'option', timestep=repr(float(solver['timestep'])),
+        option = self.element(root, 'option', timestep=number(solver['timestep']),
                               integrator=solver['integrator'], cone=solver['cone'],
-                              impratio=repr(float(solver['impratio'])),
+                              impratio=number(solver['impratio']),
                               noslip_iterations=str(int(solver['noslip_iterations'])))
         self.element(option, 'flag', **{name: 'enable' for name in solver.get('enable_flags', ())})
 
@@ -237,16 +238,16 @@ class MjcfWriter(object):
             gains.append((name, kp, 2.0 * float(arm['servo_damping_ratio']) * math.sqrt(kp * float(arm['armature']))))
         # All position gains, then all velocity gains: each a contiguous block of ctrl for the cell.
         for name, kp, _ in gains:
-            self.element(actuator, 'position', name=name, joint=name, kp=repr(kp))
+            self.element(actuator, 'position', name=name, joint=name, kp=number(kp))
         for name, _, kv in gains:
-            self.element(actuator, 'velocity', name=name + VELOCITY_SUFFIX, joint=name, kv=repr(kv))
+            self.element(actuator, 'velocity', name=name + VELOCITY_SUFFIX, joint=name, kv=number(kv))
         if self.finger in self.model.joints:
             limit = self.model.joints[self.finger].limit
             gripper = self.figures['gripper']
             self.element(actuator, 'position', name=self.finger, joint=self.finger,
-                         ctrlrange=_numbers((limit.lower, limit.upper)), kp=repr(float(gripper['finger_kp'])))
+                         ctrlrange=_numbers((limit.lower, limit.upper)), kp=number(gripper['finger_kp']))
             self.element(actuator, 'velocity', name=self.finger + VELOCITY_SUFFIX, joint=self.finger,
-                         kv=repr(float(gripper['finger_kv'])))
+                         kv=number(gripper['finger_kv']))
 
     def sensors(self, root):
         """Force and torque sensors at the flange and at the FT 300's sensor frame."""

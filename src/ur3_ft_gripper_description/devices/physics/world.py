@@ -36,6 +36,8 @@ import xml.etree.ElementTree as ElementTree
 import yaml
 from transforms3d.euler import euler2quat
 
+from ur3_ft_gripper_description.number_text import number, number_list
+
 SHAPES = ('box', 'cylinder', 'mesh')
 MESH_FORMATS = ('.stl', '.obj')
 TABLE_FIELDS = ('size', 'pose', 'friction')
@@ -96,25 +98,21 @@ class World(object):
         worldbody = root.find('worldbody')
         for solid in self.solids:
             geom = dict(name=solid.name, type=solid.shape,
-                        friction=_numbers((solid.friction,) + SPIN_AND_ROLL))
+                        friction=number_list((solid.friction,) + SPIN_AND_ROLL, ' '))
             if solid.shape == 'mesh':
                 ElementTree.SubElement(asset, 'mesh', name=solid.name, file=solid.mesh,
-                                       scale=_numbers(solid.scale))
+                                       scale=number_list(solid.scale, ' '))
                 geom['mesh'] = solid.name
             else:
-                geom['size'] = _numbers(solid.half_sizes())
-            pose = dict(pos=_numbers(solid.position), quat=_numbers(solid.quaternion))
+                geom['size'] = number_list(solid.half_sizes(), ' ')
+            pose = dict(pos=number_list(solid.position, ' '), quat=number_list(solid.quaternion, ' '))
             if solid.fixed:
                 ElementTree.SubElement(worldbody, 'geom', dict(geom, **pose))
             else:
                 body = ElementTree.SubElement(worldbody, 'body', dict(name=solid.name, **pose))
                 ElementTree.SubElement(body, 'freejoint', name=solid.name)
-                ElementTree.SubElement(body, 'geom', dict(geom, mass=repr(float(solid.mass))))
+                ElementTree.SubElement(body, 'geom', dict(geom, mass=number(solid.mass)))
         return root
-
-
-def _numbers(values):
-    return ' '.join(repr(float(v)) for v in values)
 
 
 def _finite(value):
