@@ -45,8 +45,9 @@ GRIPPER_DRIFT = 3 * GRIPPER_PERIOD
 # node's /clock can make one receipt look early.
 LEAST_OF = 5
 # The halves reach this far (simulated s) before and after the window: the longer a half, the surer it
-# holds moments when neither node lagged.
-GRIPPER_REACH = 5.0
+# holds moments when neither node lagged. Beside a second whole test run (two cells at full speed on 2
+# CPUs), halves of 10 simulated s went by twice with no five statuses on time in one of them.
+GRIPPER_REACH = 15.0
 # Reports of the real-time factor to check against /clock.
 REPORTS = 5
 # Stamps are whole nanoseconds: two readings a period apart differ by it to within a nanosecond.
