@@ -50,9 +50,8 @@ LEAST_OF = 5
 # (seen beside a second whole test run). The halves' tick times come from the statuses taken as they came.
 DRAINED = 0.002
 # The halves reach this far (simulated s) before and after the window: the longer a half, the surer it
-# holds moments when neither node lagged. Beside a second whole test run (two cells at full speed on 2
-# CPUs), halves of 10 simulated s went by twice with no five statuses on time in one of them.
-GRIPPER_REACH = 15.0
+# holds moments when neither node lagged.
+GRIPPER_REACH = 5.0
 # Reports of the real-time factor to check against /clock.
 REPORTS = 5
 # Stamps are whole nanoseconds: two readings a period apart differ by it to within a nanosecond.
