@@ -71,15 +71,23 @@ def primary_mutants(count):
 
 
 class BadPrograms(object):
-    """Sends mutants on script_command, one every BAD_PROGRAM_PERIOD of simulated time from `start` to `end`."""
+    """Sends mutants on script_command, one every BAD_PROGRAM_PERIOD of simulated time through `span` s.
 
-    def __init__(self, start, end):
+    The mutants are made before the window is placed (send_from): making them takes this process's
+    Python for a while, and inside the window that would hold back its subscribers' threads, each
+    draining its backlog in its own order afterwards, which made statuses look early.
+    """
+
+    def __init__(self, span):
         self.publisher = rospy.Publisher(HW + 'script_command', String, queue_size=100)
         rostest_helpers.wait_for_subscribers(self.publisher)
-        self.programs = primary_mutants(int(round((end - start) / BAD_PROGRAM_PERIOD)))
+        self.programs = primary_mutants(int(round(span / BAD_PROGRAM_PERIOD)))
         self.sent = 0
-        self.start = start
+        self.start = None
         self.thread = threading.Thread(target=self._send, daemon=True)
+
+    def send_from(self, start):
+        self.start = start
         self.thread.start()
 
     def _send(self):
@@ -170,14 +178,17 @@ class SimClockTest(unittest.TestCase):
         # The cell is up once every stream flows; counting starts a simulated second later.
         rostest_helpers.wait_for(lambda: cls.streams.arm and cls.streams.wrench and cls.streams.gripper,
                                  'joint_states, robotiq_ft_wrench and Robotiq2FGripperRobotInput')
+        cls.rosout = rostest_helpers.Recorder('/rosout', Log)
+        cls.bad_programs = BadPrograms(SPAN)
+        # A simulated second for the subscribers' threads to drain what came while the mutants were made.
+        rospy.sleep(1.0)
         # Whole nanoseconds on a multiple of every period (2, 8, 10, 20 ms), so that a window of SPAN holds
         # exactly SPAN / period stamps of each stream.
         grid = 40000000
         cls.start_ns = (int(rospy.get_time() * 1e9 + GRIPPER_REACH * 1e9) // grid + 25) * grid
         cls.end_ns = cls.start_ns + int(SPAN * 1e9)
         cls.start, cls.end = cls.start_ns * 1e-9, cls.end_ns * 1e-9
-        cls.rosout = rostest_helpers.Recorder('/rosout', Log)
-        cls.bad_programs = BadPrograms(cls.start, cls.end)
+        cls.bad_programs.send_from(cls.start)
         # Waits on simulated time: the window is over when /clock has passed its end by a second.
         after = GRIPPER_REACH + 1.0
         rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + after, 'the end of the windows on /clock',
