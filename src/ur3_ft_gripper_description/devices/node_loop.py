@@ -12,6 +12,7 @@ starts them again on the new master.
 import gc
 import sys
 import threading
+import warnings
 import xmlrpc.client
 
 # Seconds between two looks at the master.
@@ -182,6 +183,26 @@ def _rival_clock_line(rospy, rivals):
                 'it' if len(rivals) == 1 else 'them'))
 
 
+def cycle_publisher(rospy, topic, message_class, queue_size, on_sim_clock):
+    """The publisher of a stream the clock's control cycle sends every period.
+
+    On the simulated clock it writes to each subscriber's socket in the
+    publishing thread (rospy's queue_size=None). rospy's queued publisher
+    hands each message to a thread per subscriber and yields the processor
+    to it, and those hand-offs, several a period, cost the cycle more than
+    the rest of its work. A subscriber that stops reading then holds the
+    cycle, and with it the simulated clock of every node, once its socket's
+    buffer is full; on the wall clock (`on_sim_clock` False) that would make
+    the cell miss its periods, so there the publisher keeps rospy's queue of
+    `queue_size`.
+    """
+    if not on_sim_clock:
+        return rospy.Publisher(topic, message_class, queue_size=queue_size)
+    with warnings.catch_warnings():  # rospy warns of queue_size=None, its old default, as of a mistake
+        warnings.simplefilter('ignore')
+        return rospy.Publisher(topic, message_class, queue_size=None)
+
+
 def run_as_clock(rospy, clock, step, check_period=2.0):
     """The simulated cell's clock loop: per cycle, `clock.tick()`, /clock, `step(period, stamp)`, the pace's wait.
 
@@ -194,7 +215,7 @@ def run_as_clock(rospy, clock, step, check_period=2.0):
     from rosgraph_msgs.msg import Clock
     master = watch_master(rospy)
     gate = PublishGate(rospy)
-    publisher = rospy.Publisher('/clock', Clock, queue_size=10)
+    publisher = cycle_publisher(rospy, '/clock', Clock, 10, on_sim_clock=True)
     unreachable = MASTER_UNREACHABLE + (rosgraph.MasterException,)
     rivals = other_clock_publishers(rospy)
     if rivals:

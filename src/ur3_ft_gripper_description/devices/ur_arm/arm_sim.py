@@ -40,7 +40,6 @@ since the last.
 import threading
 
 import actionlib
-import tf2_ros
 from cartesian_control_msgs.msg import FollowCartesianTrajectoryAction, FollowCartesianTrajectoryResult
 from control_msgs.msg import FollowJointTrajectoryAction, FollowJointTrajectoryResult, JointTrajectoryControllerState
 from control_msgs.srv import QueryTrajectoryState
@@ -50,6 +49,7 @@ from geometry_msgs.msg import TransformStamped, Twist, WrenchStamped
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Bool, Float64, Float64MultiArray, String
 from std_srvs.srv import SetBool, Trigger
+from tf2_msgs.msg import TFMessage
 from trajectory_msgs.msg import JointTrajectory
 from transforms3d.quaternions import mat2quat
 from ur_dashboard_msgs.msg import RobotMode, SafetyMode, SetModeAction, SetModeFeedback, SetModeResult
@@ -98,7 +98,8 @@ class ArmSim(object):
         # -- publishers
         # A simulated second of states: faster than real time, a subscriber's turn comes in bursts, and
         # rospy drops what overflows a connection's queue.
-        self.joint_states = rospy.Publisher('joint_states', JointState, queue_size=STATE_QUEUE)
+        self.joint_states = node_loop.cycle_publisher(rospy, 'joint_states', JointState, STATE_QUEUE,
+                                                      on_sim_clock=self.clock is not None)
         self.speed_scaling = rospy.Publisher('speed_scaling_factor', Float64, queue_size=10)
         self.wrench = rospy.Publisher('wrench', WrenchStamped, queue_size=STATE_QUEUE)
         self.io_states = rospy.Publisher('~io_states', IOStates, queue_size=10)
@@ -106,7 +107,7 @@ class ArmSim(object):
         self.program_running_pub = rospy.Publisher('~robot_program_running', Bool, queue_size=1, latch=True)
         self.robot_mode_pub = rospy.Publisher('~robot_mode', RobotMode, queue_size=1, latch=True)
         self.safety_mode_pub = rospy.Publisher('~safety_mode', SafetyMode, queue_size=1, latch=True)
-        self.tf = tf2_ros.TransformBroadcaster()
+        self.tf = rospy.Publisher('/tf', TFMessage, queue_size=100)  # as tf2_ros.TransformBroadcaster's
         self.state_pubs = {name: rospy.Publisher(name + '/state', JointTrajectoryControllerState, queue_size=10)
                            for name in core.streaming_controllers}
 
@@ -167,6 +168,7 @@ class ArmSim(object):
         for server in servers:
             server.start()
         self.set_mode.start()
+        self.action_status = ActionStatus(servers + [self.set_mode.action_server])
 
     # -- calling the core --------------------------------------------------------------------
 
@@ -327,41 +329,42 @@ class ArmSim(object):
             snapshot = self.core.step(dt)
         self._report()
         self._publish(snapshot, stamp or self.rospy.Time.now())
+        self.action_status.step(dt)
         if self.physics is not None:
             self.physics.after_step()
 
     def _publish(self, s, now):
+        # A stream nobody subscribes to sends nothing, so its message is not built either (the latched
+        # topics are, for whoever subscribes later).
         q, qd = s.position.tolist(), s.velocity.tolist()
-        if 'joint_state_controller' in s.reading:
+        if 'joint_state_controller' in s.reading and self.joint_states.get_num_connections():
             joint_state = JointState(name=self.joint_names, position=q, velocity=qd, effort=s.effort.tolist())
             joint_state.header.stamp = now
             self.joint_states.publish(joint_state)
-        transform = TransformStamped()
-        transform.header.stamp = now
-        transform.header.frame_id = self.prefix + 'base'
-        transform.child_frame_id = self.prefix + 'tool0_controller'
-        translation, rotation = transform.transform.translation, transform.transform.rotation
-        translation.x, translation.y, translation.z = s.tool_pose[:3, 3]
-        rotation.w, rotation.x, rotation.y, rotation.z = mat2quat(s.tool_pose[:3, :3])
-        self.tf.sendTransform(transform)
-        if 'speed_scaling_state_controller' in s.reading:
+        if self.tf.get_num_connections():
+            transform = TransformStamped()
+            transform.header.stamp = now
+            transform.header.frame_id = self.prefix + 'base'
+            transform.child_frame_id = self.prefix + 'tool0_controller'
+            translation, rotation = transform.transform.translation, transform.transform.rotation
+            translation.x, translation.y, translation.z = s.tool_pose[:3, 3]
+            rotation.w, rotation.x, rotation.y, rotation.z = mat2quat(s.tool_pose[:3, :3])
+            self.tf.publish(TFMessage(transforms=[transform]))
+        if 'speed_scaling_state_controller' in s.reading and self.speed_scaling.get_num_connections():
             self.speed_scaling.publish(Float64(data=s.speed_scaling))
-        if 'force_torque_sensor_controller' in s.reading:
+        if 'force_torque_sensor_controller' in s.reading and self.wrench.get_num_connections():
             wrench = WrenchStamped()
             wrench.header.stamp = now
             wrench.header.frame_id = self.prefix + 'tool0_controller'
             force, torque = wrench.wrench.force, wrench.wrench.torque
             force.x, force.y, force.z, torque.x, torque.y, torque.z = s.wrench
             self.wrench.publish(wrench)
-        self.io_states.publish(IOStates(
-            digital_in_states=[Digital(pin=i, state=v) for i, v in enumerate(s.digital_in)],
-            digital_out_states=[Digital(pin=i, state=v) for i, v in enumerate(s.digital_out)],
-            flag_states=[],
-            analog_in_states=[Analog(pin=i, domain=Analog.VOLTAGE, state=v) for i, v in enumerate(s.analog_in)],
-            analog_out_states=[Analog(pin=i, domain=Analog.CURRENT, state=v) for i, v in enumerate(s.analog_out)]))
-        self.tool_data.publish(ToolDataMsg(
-            tool_mode=ToolDataMsg.TOOL_RUNNING_MODE if s.tool_running else ToolDataMsg.TOOL_IDLE_MODE,
-            tool_output_voltage=s.tool_voltage))
+        if self.io_states.get_num_connections():
+            self._publish_io(s)
+        if self.tool_data.get_num_connections():
+            self.tool_data.publish(ToolDataMsg(
+                tool_mode=ToolDataMsg.TOOL_RUNNING_MODE if s.tool_running else ToolDataMsg.TOOL_IDLE_MODE,
+                tool_output_voltage=s.tool_voltage))
         # The latched topics: published when they change, as the driver does.
         published = (s.program_running, s.robot_mode, s.safety_mode)
         if self.published is None or published[0] != self.published[0]:
@@ -371,6 +374,8 @@ class ArmSim(object):
             self.safety_mode_pub.publish(SafetyMode(mode=getattr(SafetyMode, s.safety_mode)))
         self.published = published
         for name, desired, desired_velocity in s.controller_states:
+            if not self.state_pubs[name].get_num_connections():
+                continue
             state = JointTrajectoryControllerState(joint_names=self.joint_names)
             state.header.stamp = now
             state.desired.positions, state.desired.velocities = desired.tolist(), desired_velocity.tolist()
@@ -378,6 +383,40 @@ class ArmSim(object):
             state.error.positions = (desired - s.position).tolist()
             state.error.velocities = (desired_velocity - s.velocity).tolist()
             self.state_pubs[name].publish(state)
+
+    def _publish_io(self, s):
+        self.io_states.publish(IOStates(
+            digital_in_states=[Digital(pin=i, state=v) for i, v in enumerate(s.digital_in)],
+            digital_out_states=[Digital(pin=i, state=v) for i, v in enumerate(s.digital_out)],
+            flag_states=[],
+            analog_in_states=[Analog(pin=i, domain=Analog.VOLTAGE, state=v) for i, v in enumerate(s.analog_in)],
+            analog_out_states=[Analog(pin=i, domain=Analog.CURRENT, state=v) for i, v in enumerate(s.analog_out)]))
+
+
+class ActionStatus(object):
+    """The action servers' status topics, published from the control cycle at each server's own rate.
+
+    actionlib gives every server a rospy.Timer for its status, and on
+    simulated time rospy wakes every such timer's thread at each /clock tick
+    to look at the time: with a server per controller, those wake-ups cost
+    the node more than its control cycle. So the timers are stopped, and the
+    cycle publishes each server's status at the rate actionlib read for it
+    (actionlib_status_frequency, 5 Hz by default), in the same ROS time.
+    """
+
+    def __init__(self, servers):
+        self.due = []  # [server, period (s), time since its last status (s)]
+        for server in servers:
+            if server.status_frequency > 0.0:
+                server.status_timer.shutdown()
+                self.due.append([server, 1.0 / server.status_frequency, 0.0])
+
+    def step(self, dt):
+        for entry in self.due:
+            entry[2] += dt
+            if entry[2] >= entry[1]:
+                entry[2] -= entry[1]
+                entry[0].publish_status()
 
 
 def _points(points):
