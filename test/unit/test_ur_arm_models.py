@@ -389,6 +389,20 @@ def test_jacobian_and_inverse_kinematics_agree_with_the_model(configured_model):
     assert arm.inverse(far, home) is None
 
 
+@pytest.mark.parametrize('ur_type', ['ur3', 'ur5e', 'ur10e', 'ur16e'])
+def test_forward_kinematics_is_the_models_own_at_any_pose(configured_model, ur_type):
+    """The control cycle's forward kinematics (its rotations made in one vectorised step) against the
+    model's own chain of transforms (kinematics.Model), and the same turned by its chain product."""
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics
+    model = configured_model(ur_type, True, True)
+    arm = ArmKinematics(model.text, JOINTS)
+    assert arm.all_revolute
+    for q in np.random.default_rng(7).uniform(-2.0 * np.pi, 2.0 * np.pi, (50, 6)):
+        expected = model.transform('base', 'tool0', dict(zip(JOINTS, q)))
+        assert np.allclose(arm.forward(q), expected, atol=1e-12), q
+        assert np.allclose(arm._chain(q)[0], expected, atol=1e-12), q
+
+
 # -- Cartesian motions ----------------------------------------------------------------
 
 HOME = np.array([0.0, -1.57, 1.57, -1.57, -1.57, 0.0])

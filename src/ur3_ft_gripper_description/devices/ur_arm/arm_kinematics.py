@@ -28,6 +28,12 @@ from transforms3d.axangles import axangle2mat, mat2axangle
 from ur3_ft_gripper_description import kinematics
 
 
+def _cross_matrix(axis):
+    """K with K v = unit(axis) x v."""
+    x, y, z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
 class ArmKinematics(object):
     def __init__(self, urdf_text, joints, base='base', tip='tool0'):
         model = kinematics.Model(urdf_text)
@@ -58,11 +64,28 @@ class ArmKinematics(object):
                 self.segments.append((fixed, joint, axis, index))
                 fixed = np.eye(4)
         self.tail = fixed
+        # forward() runs every control period: where every moving joint turns (a UR's do), their
+        # rotations are made in one vectorised step by Rodrigues' formula, R = I + sin(q) K +
+        # (1 - cos(q)) K^2 (K: the unit axis' cross-product matrix), each after its fixed transform.
+        self.all_revolute = all(joint.type in ('revolute', 'continuous') for _, joint, _, _ in self.segments)
+        self.segment_fixed = np.array([fixed for fixed, _, _, _ in self.segments])
+        self.segment_joint = [index for _, _, _, index in self.segments]
+        self.cross_matrices = np.array([_cross_matrix(axis) for _, _, axis, _ in self.segments])
+        self.cross_squared = np.matmul(self.cross_matrices, self.cross_matrices)
         self.nominal = NominalUr.from_arm(self)
 
     def forward(self, positions):
         """4x4 pose of the tip in the base for joint positions in `joints` order."""
-        return self._chain(positions)[0]
+        if not self.all_revolute:
+            return self._chain(positions)[0]
+        q = np.asarray(positions, dtype=float)[self.segment_joint][:, None, None]
+        turns = np.eye(3) + np.sin(q) * self.cross_matrices + (1.0 - np.cos(q)) * self.cross_squared
+        links = self.segment_fixed.copy()
+        links[:, :3, :3] = np.matmul(self.segment_fixed[:, :3, :3], turns)
+        pose = links[0]
+        for link in links[1:]:
+            pose = pose.dot(link)
+        return pose.dot(self.tail)
 
     def _chain(self, positions):
         """The tip's pose, and each actuated joint's axis and origin in the base (controller order)."""

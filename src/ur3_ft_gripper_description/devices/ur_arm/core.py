@@ -217,12 +217,16 @@ class ArmCore(object):
     def _flange(self):
         return self.arm.forward(np.array(self.motion.position, dtype=float))
 
-    def tcp_force(self):
-        """(base axes, TCP axes): the robot's own external wrench at its TCP (tcp_wrench.py)."""
+    def tcp_force(self, flange_pose=None):
+        """(base axes, TCP axes): the robot's own external wrench at its TCP (tcp_wrench.py).
+
+        `flange_pose`: the flange's pose now, where the caller has it (default: computed here).
+        """
         flange = self.motion.flange_wrench
         if flange is None:
             return np.zeros(6), np.zeros(6)
-        return self.wrench_model.at_tcp(flange, self._flange()[:3, :3], self.tcp, self.robot.payload)
+        pose = self._flange() if flange_pose is None else flange_pose
+        return self.wrench_model.at_tcp(flange, pose[:3, :3], self.tcp, self.robot.payload)
 
     def actual_state(self):
         """(positions, velocities) of the joints now, as copies."""
@@ -637,12 +641,13 @@ class ArmCore(object):
         snapshot = Snapshot()
         snapshot.position, snapshot.velocity = self.actual_state()
         snapshot.effort = np.array(self.motion.effort, dtype=float)
-        snapshot.tool_pose = self.arm.forward(snapshot.position).dot(self.tcp)
+        flange_pose = self.arm.forward(snapshot.position)
+        snapshot.tool_pose = flange_pose.dot(self.tcp)
         snapshot.speed_scaling = robot.speed_scaling() * limit_factor
         snapshot.reading = {name for name in READ_ONLY if name in self.manager.controllers and
                             self.manager.controllers[name].running}
         # The robot's own wrench, in tool0_controller (the TCP) as ur_robot_driver publishes it.
-        snapshot.wrench = tuple(self.tcp_force()[1])
+        snapshot.wrench = tuple(self.tcp_force(flange_pose)[1])
         snapshot.digital_in, snapshot.digital_out = list(robot.digital_in), list(robot.digital_out)
         snapshot.analog_in, snapshot.analog_out = list(robot.analog_in), list(robot.analog_out)
         snapshot.tool_voltage = robot.tool_voltage

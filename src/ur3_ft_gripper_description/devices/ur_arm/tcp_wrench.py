@@ -87,7 +87,10 @@ class TcpWrench(object):
         external = self._external_at_flange(flange_wrench, flange_rotation, payload)
         force, torque = external[:3], external[3:]
         # The same force about the TCP: the moment arm runs from the TCP to the flange's origin.
-        torque = torque - np.cross(tcp[:3, 3], force)
+        # (np.cross written out: on 3-vectors it costs ten times this, and this runs every control period)
+        x, y, z = tcp[:3, 3]
+        torque = torque - np.array((y * force[2] - z * force[1], z * force[0] - x * force[2],
+                                    x * force[1] - y * force[0]))
         tcp_axes = np.concatenate((tcp[:3, :3].T.dot(force), tcp[:3, :3].T.dot(torque)))
         base_axes = np.concatenate((flange_rotation.dot(force), flange_rotation.dot(torque)))
         return base_axes, tcp_axes

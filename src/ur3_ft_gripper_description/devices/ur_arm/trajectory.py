@@ -128,6 +128,11 @@ class Spline(object):
         self.velocities = zeros if velocities is None else np.asarray(velocities, dtype=float)
         self.accelerations = zeros if accelerations is None else np.asarray(accelerations, dtype=float)
         self.coefficients = [self._segment(i) for i in range(n_points - 1)]
+        # Those of the velocity and the acceleration, made once: a controller samples every cycle.
+        self.velocity_coefficients = [c[1:] * np.arange(1, 6)[:, None] for c in self.coefficients]
+        self.acceleration_coefficients = [c[2:] * (np.arange(2, 6) * np.arange(1, 5))[:, None]
+                                          for c in self.coefficients]
+        self._last = None  # (t, its sample): a cycle asks for the same time more than once
 
     @property
     def end_time(self):
@@ -157,19 +162,20 @@ class Spline(object):
 
     def sample(self, t):
         """(position, velocity, acceleration) arrays at time t."""
-        zeros = np.zeros_like(self.positions[0])
         if not self.coefficients or t >= self.times[-1]:
-            return self.positions[-1].copy(), zeros, zeros.copy()
+            return self.positions[-1].copy(), np.zeros_like(self.positions[0]), np.zeros_like(self.positions[0])
         if t <= self.times[0]:
             return self.positions[0].copy(), self.velocities[0].copy(), self.accelerations[0].copy()
-        i = int(np.searchsorted(self.times, t, side='right')) - 1
-        c = self.coefficients[i]
-        s = t - self.times[i]
-        k = np.arange(6)
-        position = (s ** k).dot(c)
-        velocity = (k[1:] * s ** (k[1:] - 1)).dot(c[1:])
-        acceleration = (k[2:] * (k[2:] - 1) * s ** (k[2:] - 2)).dot(c[2:])
-        return position, velocity, acceleration
+        if self._last is None or self._last[0] != t:
+            i = int(np.searchsorted(self.times, t, side='right')) - 1
+            powers = (t - self.times[i]) ** _POWERS
+            self._last = (t, (powers.dot(self.coefficients[i]), powers[:5].dot(self.velocity_coefficients[i]),
+                              powers[:4].dot(self.acceleration_coefficients[i])))
+        position, velocity, acceleration = self._last[1]
+        return position.copy(), velocity.copy(), acceleration.copy()
+
+
+_POWERS = np.arange(6)
 
 
 def stop_spline(start_time, position, velocity, duration):
