@@ -13,7 +13,11 @@ back and forth and the gripper closes and opens through its registers:
 - as received here, per simulated second: joint_states (the arm's control rate), robotiq_ft_wrench
   (100 Hz) and Robotiq2FGripperRobotInput (50 Hz), and the largest gap between consecutive stamps
   (simulated ms; the gripper's status has no stamp);
-- CPU of the arm's process (the cell steps there), and of the FT 300's and the gripper's nodes.
+- CPU of the arm's process (the cell steps there), also per control cycle, and of the FT 300's and the
+  gripper's nodes;
+- in the same process just before, the cell alone (no ROS, no controller): its real-time factor on CPU
+  time over the same back-and-forth motion at the ur_type's control period with the fingers closing and
+  opening, so that /clock over the wall clock reads as a share of what the physics allows.
 Figures, not pass/fail: exit status 0 when every measurement ran.
 """
 import os
@@ -51,9 +55,40 @@ class Arrivals(object):
         return dict(hz=len(items) / simulated, max_gap=max(gaps) if gaps else float('nan'))
 
 
+PERIOD = {'ur3': 0.008, 'ur5e': 0.002}  # s: a CB3's and an e-Series' control period
+
+
+def cell_alone(ur_type, seconds):
+    """The cell's real-time factor on CPU time, stepped by the arm's joint motion at `ur_type`'s control
+    period over `seconds` of simulated time: 2 s moves between HOME and AWAY (a quintic, as the
+    trajectory controller streams them), the fingers closing and opening with each move."""
+    import math
+    import tempfile
+    import physics  # bench/physics.py: the cell as the arm's node builds it
+    from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
+    from ur3_ft_gripper_description.devices.ur_arm.physics_joints import PhysicsJointMotion
+    with tempfile.TemporaryDirectory() as folder:
+        cell, _ = physics.build(folder, ur_type)
+    motion = PhysicsJointMotion(cell)
+    dt, home, away = PERIOD[ur_type], motion.reference.copy(), motion.reference + [0.5, 0.17, -0.17, 0.0, 0.0, 0.5]
+    per_move = int(round(2.0 / dt))
+    start_time, start_cpu = cell.time, time.process_time()
+    for k in range(int(round(seconds / dt))):
+        move, step = divmod(k, per_move)
+        origin, target = (home, away) if move % 2 == 0 else (away, home)
+        if step == 0:
+            cell.command_finger(0.0 if move % 2 == 0 else 0.14, 0.075, 125.0)
+        s = (step + 1) / float(per_move)
+        blend = 10 * s ** 3 - 15 * s ** 4 + 6 * s ** 5
+        rate = (30 * s ** 2 - 60 * s ** 3 + 30 * s ** 4) / 2.0
+        motion.step(JointCommand('SERVO', origin + (target - origin) * blend, (target - origin) * rate), dt)
+    return (cell.time - start_time) / (time.process_time() - start_cpu)
+
+
 def bench(case, seconds, rospy):
     """`case`: 'UR_TYPE:FACTOR'."""
     ur_type, factor = case.split(':')
+    alone = cell_alone(ur_type, 20.0)
     import actionlib
     from control_msgs.msg import FollowJointTrajectoryAction, FollowJointTrajectoryGoal
     from diagnostic_msgs.msg import DiagnosticArray
@@ -119,7 +154,9 @@ def bench(case, seconds, rospy):
                     moves=moves, seconds=end - start, clock_factor=simulated / (end - start),
                     streams={k: s.window(start, end, simulated) for k, s in streams.items()},
                     rtf_mean=sum(window) / len(window) if window else float('nan'),
-                    rtf_min=min(window) if window else float('nan'), cpu=cpu)
+                    rtf_min=min(window) if window else float('nan'), cpu=cpu, alone=alone,
+                    cycle_us=1e6 * cpu['/ur_hardware_interface'] / 100.0 * (end - start)
+                    / (simulated * rospy.get_param('/hardware_control_loop/loop_hz')))
     finally:
         benchlib.stop(launch)
 
@@ -138,20 +175,22 @@ def table(results):
              'trajectory back and forth through scaled_pos_joint_traj_controller and the gripper closing and '
              'opening at rSP 128 all along. Rates are per simulated second; gaps between stamps in simulated ms.'
              % (benchlib.machine(), benchlib.load_average()), '',
-             '| ur_type | real_time_factor | /clock over wall clock | reported mean / lowest | topic | per simulated s '
-             '| largest stamp gap (ms) |', '| --- | --- | --- | --- | --- | --- | --- |']
+             '| ur_type | real_time_factor | /clock over wall clock | the cell alone (CPU) | share | reported mean / '
+             'lowest | topic | per simulated s | largest stamp gap (ms) |',
+             '| --- | --- | --- | --- | --- | --- | --- | --- | --- |']
     for r in results:
         for k, (topic, s) in enumerate(sorted(r['streams'].items())):
-            head = ('| %s | %g | %.2f | %.2f / %.2f ' % (r['ur_type'], r['factor'], r['clock_factor'], r['rtf_mean'],
-                                                       r['rtf_min']) if k == 0 else '| | | | ')
+            head = ('| %s | %g | %.2f | %.1f | %.2f | %.2f / %.2f ' % (
+                r['ur_type'], r['factor'], r['clock_factor'], r['alone'], r['clock_factor'] / r['alone'],
+                r['rtf_mean'], r['rtf_min']) if k == 0 else '| | | | | | ')
             lines.append(head + '| %s | %.1f | %.1f |' % (topic, s['hz'], s['max_gap']))
     lines += ['', '| ur_type | real_time_factor | measured (wall s) | trajectories | CPU (% of one core): '
-              'ur_hardware_interface (arm + cell) | robotiq_ft_sensor | robotiq2FGripper |',
-              '| --- | --- | --- | --- | --- | --- | --- |']
+              'ur_hardware_interface (arm + cell) | its CPU per control cycle (us) | robotiq_ft_sensor | '
+              'robotiq2FGripper |', '| --- | --- | --- | --- | --- | --- | --- | --- |']
     for r in results:
-        lines.append('| %s | %g | %.0f | %d | %.0f | %.0f | %.0f |' % (
+        lines.append('| %s | %g | %.0f | %d | %.0f | %.0f | %.0f | %.0f |' % (
             r['ur_type'], r['factor'], r['seconds'], r['moves'], r['cpu']['/ur_hardware_interface'],
-            r['cpu']['/robotiq_ft_sensor'], r['cpu']['/robotiq2FGripper']))
+            r['cycle_us'], r['cpu']['/robotiq_ft_sensor'], r['cpu']['/robotiq2FGripper']))
     return '\n'.join(lines) + '\n'
 
 
