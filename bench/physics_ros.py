@@ -60,17 +60,20 @@ PERIOD = {'ur3': 0.008, 'ur5e': 0.002}  # s: a CB3's and an e-Series' control pe
 
 def cell_alone(ur_type, seconds):
     """The cell's real-time factor on CPU time, stepped by the arm's joint motion at `ur_type`'s control
-    period over `seconds` of simulated time: 2 s moves between HOME and AWAY (a quintic, as the
-    trajectory controller streams them), the fingers closing and opening with each move."""
-    import math
-    import tempfile
-    import physics  # bench/physics.py: the cell as the arm's node builds it
+    period over `seconds` of simulated time: the bench's own 2 s moves between HOME and AWAY (a quintic,
+    as the trajectory controller streams them), the fingers closing and opening with each move."""
+    import numpy as np
+    from ur3_ft_gripper_description.devices.physics.arm_cell import default_world_file
+    from ur3_ft_gripper_description.devices.physics.cell import Cell
+    from ur3_ft_gripper_description.devices.physics.world import load_world
     from ur3_ft_gripper_description.devices.ur_arm.joints import JointCommand
     from ur3_ft_gripper_description.devices.ur_arm.physics_joints import PhysicsJointMotion
-    with tempfile.TemporaryDirectory() as folder:
-        cell, _ = physics.build(folder, ur_type)
+    from ur3_ft_gripper_description.model import description, export
+    # As the arm's node builds it (physics/arm_cell.py): the model as loaded, the default world, HOME.
+    urdf = description.to_xml(description.expand_model(export.model_mappings(ur_type=ur_type)))
+    cell = Cell.from_description(urdf, ur_type, '', load_world(default_world_file()), HOME)
     motion = PhysicsJointMotion(cell)
-    dt, home, away = PERIOD[ur_type], motion.reference.copy(), motion.reference + [0.5, 0.17, -0.17, 0.0, 0.0, 0.5]
+    dt, home, away = PERIOD[ur_type], np.array(HOME), np.array(AWAY)
     per_move = int(round(2.0 / dt))
     start_time, start_cpu = cell.time, time.process_time()
     for k in range(int(round(seconds / dt))):
