@@ -184,16 +184,16 @@ def _rival_clock_line(rospy, rivals):
 
 
 def cycle_publisher(rospy, topic, message_class, queue_size, on_sim_clock):
-    """The publisher of a stream the clock's control cycle sends every period.
+    """The publisher of a stream the control cycle sends every period, each message of which counts.
 
     On the simulated clock it writes to each subscriber's socket in the
     publishing thread (rospy's queue_size=None). rospy's queued publisher
     hands each message to a thread per subscriber and yields the processor
-    to it, and those hand-offs, several a period, cost the cycle more than
-    the rest of its work. A subscriber that stops reading then holds the
-    cycle, and with it the simulated clock of every node, once its socket's
-    buffer is full; on the wall clock (`on_sim_clock` False) that would make
-    the cell miss its periods, so there the publisher keeps rospy's queue of
+    to it, and those hand-offs, every period, cost the cycle about as much as
+    its physics. A subscriber that stops reading then holds the cycle, and
+    with it the simulated clock of every node, once its socket's buffer is
+    full; on the wall clock (`on_sim_clock` False) that would make the cell
+    miss its periods, so there the publisher keeps rospy's queue of
     `queue_size`.
     """
     if not on_sim_clock:
@@ -215,7 +215,10 @@ def run_as_clock(rospy, clock, step, check_period=2.0):
     from rosgraph_msgs.msg import Clock
     master = watch_master(rospy)
     gate = PublishGate(rospy)
-    publisher = cycle_publisher(rospy, '/clock', Clock, 10, on_sim_clock=True)
+    # Queued, unlike the cycle's streams: a subscriber that falls behind then skips ticks (rospy drops the
+    # oldest of a connection's queue) and its ROS time stays the cell's; written directly, every tick
+    # would wait in its socket, and its clock would lag ever further behind.
+    publisher = rospy.Publisher('/clock', Clock, queue_size=10)
     unreachable = MASTER_UNREACHABLE + (rosgraph.MasterException,)
     rivals = other_clock_publishers(rospy)
     if rivals:
