@@ -10,11 +10,14 @@ starts them again on the new master.
 """
 
 import gc
+import os
 import sys
 import threading
 import warnings
 import xmlrpc.client
 
+# The clock loop's niceness at real_time_factor 0 (see run_as_clock).
+FULL_SPEED_NICENESS = 5
 # Seconds between two looks at the master.
 MASTER_CHECK_PERIOD = 1.0
 
@@ -252,6 +255,11 @@ def run_as_clock(rospy, clock, step, check_period=2.0):
         step(clock.period, message.clock)
         return True
 
+    if clock.factor == 0.0:
+        # As fast as the machine allows, the clock takes the processor the cell's other nodes leave: they
+        # work when it moves on, and a clock that took the processor from them would run ahead of them
+        # (a relay's stamps late, a slow node's time behind), so it yields to them.
+        os.nice(FULL_SPEED_NICENESS)
     clock.start()
     while not rospy.is_shutdown():
         clock.tick()
