@@ -11,15 +11,18 @@ velocity at the contact point, in its tangent plane). From them:
   force the contacts carry, within 0.3 N and 3 %: whatever pushes the tool sideways, the sensors read
   it, and nothing else;
 - nothing slides (every tool contact under 1 mm/s) and the contact is symmetric (each pad carries
-  40 to 60 % of the normal force): a press with x and y compliant at 0 N then reads under 5 % of
-  the normal force sideways, on the FT 300, the robot and the contacts;
+  40 to 60 % of the normal force): the example's press straight down, landing gently, then reads
+  under 5 % of the normal force sideways, on the FT 300, the robot and the contacts; so does a press
+  with x and y compliant at 0 N at the example's own landing speed;
 - a planted lopsided contact (one pad 1 mm longer than the other) is seen as one: the check that
   finds the shipped press symmetric can fail.
 
-With only z compliant (the example's program) the sideways force is 0.39 to 0.45 of the normal
-force, with nothing sliding: the tool sticks where it touched, and the arm's joint servos, whose
-stiffness is per joint, turn force mode's straight-down displacement into a push that is not
-straight down. doc/simulation.md says so; the first test measures and prints it.
+The robot pushes along force_mode's compliant axes only: the servos' stiffness is per joint, and a
+target running ahead of the tool straight down would otherwise pull across too (0.39 to 0.45 of the
+normal force before force_mode.uncoupled; the gentle test fails without it). At the example's own
+landing speed (5 cm/s) the press straight down reads 3 to 7 % sideways, left by the landing: the tool
+pivots a little about its pads as they strike, they stick, and the held axes push back towards the
+program's pose. doc/simulation.md says so; the first test measures and prints it.
 """
 import math
 import os
@@ -46,6 +49,7 @@ FORCES = (10.0, 20.0, 40.0)
 SLIDING = 0.001     # m/s: a tool contact slower than this sticks (measured: under 0.2 mm/s)
 SHARE = (0.4, 0.6)  # each pad's part of the normal force in a symmetric contact (measured: 0.45 to 0.55)
 SIDEWAYS = 0.05     # of the normal force: what a symmetric contact that does not slide may carry sideways
+GENTLE = 0.005      # m/s: a landing that leaves no sideways push behind (measured: 2 to 4 % at 10 to 40 N)
 COMPLIANT_XY = force_mode_press.PROGRAM.replace('[0, 0, 1, 0, 0, 0]', '[1, 1, 1, 0, 0, 0]')
 
 
@@ -100,15 +104,17 @@ class Press(object):
             rows.append((self.pad_geoms[pads.pop()], float(force[0]), float(np.linalg.norm(slip))))
         return rows
 
-    def run(self, program, force):
-        """The program pressing with `force` (N), the FT 300 zeroed in the air before; the readings averaged
-        over the example's second (dict, forces in base_link's axes)."""
+    def run(self, program, force, speed=0.05):
+        """The program pressing with `force` (N), landing at `speed` (m/s), the FT 300 zeroed in the air
+        before; the readings averaged over the example's second (dict, forces in base_link's axes)."""
         cell = self.cell
         self.cycles(1.0)
         zero = np.array(cell.wrench())
-        self.core.script_command(program.format(force=force, speed=0.05, seconds=force_mode_press.SETTLE + 2.0))
+        # The example's time to settle, after the time its descent takes at this speed beyond its own.
+        settle = force_mode_press.SETTLE + force_mode_press.START_HEIGHT * (1.0 / speed - 1.0 / 0.05)
+        self.core.script_command(program.format(force=force, speed=speed, seconds=settle + 2.0))
         assert self.core.script_running, self.core.take_messages()
-        self.cycles(force_mode_press.SETTLE)
+        self.cycles(settle)
         ft300, robot, shares, slip = [], [], {pad: 0.0 for pad in PADS}, 0.0
         began, impulse = cell.time, cell.contact_impulse()
         pads_before = [cell.body_pose(pad)[0] for pad in PADS]
@@ -160,6 +166,14 @@ def press(mujoco, robot):
     return lambda mjcf_path=robot[0]: Press(mjcf_path, robot[1])
 
 
+def check_straight(result, force):
+    """Nothing slides, both pads alike, and under 5 % of the normal force sideways on every reading."""
+    assert result['slip'] < SLIDING and result['moved'] < 1e-4, describe(force, result)
+    assert symmetric(result), describe(force, result)
+    for reading in (result['ft300'], result['robot'], result['contact']):
+        assert sideways(reading) < SIDEWAYS * result['contact'][2], describe(force, result)
+
+
 @pytest.mark.parametrize('force', FORCES)
 def test_pressing_straight_down_the_sensors_read_the_sideways_force_the_contacts_carry(press, force):
     result = press().run(force_mode_press.PROGRAM, force)
@@ -171,15 +185,21 @@ def test_pressing_straight_down_the_sensors_read_the_sideways_force_the_contacts
 
 
 @pytest.mark.parametrize('force', FORCES)
+def test_pressing_straight_down_after_a_gentle_landing_reads_under_5_percent_sideways(press, force):
+    # The example's own program: only z compliant, the other axes held at the program's pose.
+    result = press().run(force_mode_press.PROGRAM, force, speed=GENTLE)
+    print('z compliant, landing at %g m/s: %s' % (GENTLE, describe(force, result)))
+    check_sensors(force, result)
+    check_straight(result, force)
+
+
+@pytest.mark.parametrize('force', FORCES)
 def test_a_symmetric_press_that_does_not_slide_reads_under_5_percent_sideways(press, force):
     # x and y compliant at 0 N: nothing but the contact decides the sideways force.
     result = press().run(COMPLIANT_XY, force)
     print('x, y, z compliant: ' + describe(force, result))
     check_sensors(force, result)
-    assert result['slip'] < SLIDING and result['moved'] < 1e-4, describe(force, result)
-    assert symmetric(result), describe(force, result)
-    for reading in (result['ft300'], result['robot'], result['contact']):
-        assert sideways(reading) < SIDEWAYS * result['contact'][2], describe(force, result)
+    check_straight(result, force)
 
 
 def lopsided(mjcf_path, folder):

@@ -389,6 +389,51 @@ def test_jacobian_and_inverse_kinematics_agree_with_the_model(configured_model):
     assert arm.inverse(far, home) is None
 
 
+def test_the_jacobian_of_a_tcp_moves_with_that_point(configured_model):
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics, pose_error
+    arm = ArmKinematics(configured_model('ur3', True, True).text, JOINTS)
+    tcp = np.eye(4)
+    tcp[:3, 3] = [0.01, -0.02, 0.2]
+    q = np.array([0.3, -1.2, 1.4, -1.8, -1.5, 0.4])
+    numeric = np.array([pose_error(arm.forward(q + 1e-6 * np.eye(6)[j]).dot(tcp), arm.forward(q).dot(tcp)) / 1e-6
+                        for j in range(6)]).T
+    assert np.allclose(numeric, arm.jacobian(q, tcp), atol=1e-5)
+
+
+@pytest.mark.parametrize('selection', [[0, 0, 1, 0, 0, 0], [1, 0, 1, 0, 0, 1]])
+def test_force_mode_on_servos_that_give_pulls_along_the_compliant_axes_only(configured_model, selection):
+    """The servos' pull (stiffness times joint offset: torques) towards a target ahead of the TCP along
+    the compliant axes, its other axes moved by uncoupled(), is at the TCP a wrench along the compliant
+    axes alone: with the others held, the compliance block's inverse times the lead. Without the move
+    the same lead pulls across too (the per-joint stiffness couples the axes)."""
+    from ur3_ft_gripper_description.devices.ur_arm import force_mode as fm
+    from ur3_ft_gripper_description.devices.ur_arm.arm_kinematics import ArmKinematics, rotation_matrix
+    arm = ArmKinematics(configured_model('ur3', True, True).text, JOINTS)
+    q = np.array([0.3, -1.2, 1.4, -1.8, -1.5, 0.4])
+    tcp = np.eye(4)
+    tcp[2, 3] = 0.2
+    jacobian = arm.jacobian(q, tcp)
+    stiffness = np.array([5600.0, 5600.0, 2800.0, 1200.0, 1200.0, 1200.0])
+    frame = rotation_matrix([0.2, -0.1, 0.3])
+    rotation = np.kron(np.eye(2), frame)
+    selection = np.array(selection) != 0
+    ahead = np.where(selection, [0.001, 0.002, 0.0005, 0.0, 0.0, 0.003], 0.0)
+
+    def pull(displacement):
+        """The wrench (force frame) of the servos pulling towards `displacement` (base axes) from the TCP."""
+        torques = stiffness * np.linalg.solve(jacobian, displacement)
+        return rotation.T.dot(np.linalg.solve(jacobian.T, torques))
+
+    linear, angular = fm.uncoupled(jacobian, stiffness, frame, selection, ahead)
+    wrench = pull(rotation.dot(ahead) + np.concatenate((linear, angular)))
+    assert np.allclose(wrench[~selection], 0.0, atol=1e-9), wrench
+    compliance = rotation.T.dot(jacobian.dot(jacobian.T / stiffness[:, None])).dot(rotation)
+    expected = np.linalg.solve(compliance[np.ix_(selection, selection)], ahead[selection])
+    assert np.allclose(wrench[selection], expected, rtol=1e-9), (wrench, expected)
+    across = pull(rotation.dot(ahead))[~selection]
+    assert np.max(np.abs(across)) > 0.1 * np.max(np.abs(expected)), across
+
+
 @pytest.mark.parametrize('ur_type', ['ur3', 'ur5e', 'ur10e', 'ur16e'])
 def test_forward_kinematics_is_the_models_own_at_any_pose(configured_model, ur_type):
     """The control cycle's forward kinematics (its rotations made in one vectorised step) against the

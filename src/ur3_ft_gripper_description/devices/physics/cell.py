@@ -443,6 +443,11 @@ class Cell(object):
     # -- the arm ------------------------------------------------------------------
 
     @property
+    def arm_stiffness(self):
+        """The arm's position servos' gains (N m/rad, in arm_joints' order), as a copy."""
+        return self._arm_kp.copy()
+
+    @property
     def arm_position(self):
         return self.data.qpos[self._arm_qpos].copy()
 

@@ -98,9 +98,14 @@ class ArmKinematics(object):
             t = t.dot(kinematics.motion_matrix(joint, positions[index]))
         return t.dot(self.tail), axes, points
 
-    def jacobian(self, positions):
-        """6xN geometric Jacobian of the tip in the base frame (revolute joints): linear, then angular."""
+    def jacobian(self, positions, tcp=None):
+        """6xN geometric Jacobian of the tip in the base frame (revolute joints): linear, then angular.
+
+        With `tcp` (4x4 in the tip's frame), of that point instead.
+        """
         tip, axes, points = self._chain(positions)
+        if tcp is not None:
+            tip = tip.dot(tcp)
         axes = np.array(axes)
         return np.vstack([np.cross(axes, tip[:3, 3] - np.array(points)).T, axes.T])
 

@@ -28,13 +28,24 @@ period (bench/force_mode.py measures it).
 
 Nothing here moves the arm: `step` gives the displacement of the TCP for one
 control cycle, which the core adds to what the program commands.
+
+On joint servos that give (the physics cell's), a displaced pose alone is
+not what the robot does. Where the tool is held (pressed on a table), the
+target runs ahead of the TCP, and the servos pull towards it with their
+Cartesian stiffness J^-T K J^-1; with a stiffness per joint that couples
+the axes, so a lead straight down pulls across as well. `uncoupled` moves
+the target's non-compliant axes just enough to cancel that pull: the
+robot then pushes along the compliant axes only, as the force it
+controls, and holds the others where the program wants them. The lead
+is counted from where the admittance's own motion takes the TCP, so in
+free air, where the TCP keeps up, the target is the displaced pose alone.
 """
 
 import math
 
 import numpy as np
 
-from .arm_kinematics import rotation_matrix
+from .arm_kinematics import pose_error, rotation_matrix
 
 # The admittance's virtual mass (kg) and moment of inertia (kg m^2).
 VIRTUAL_MASS = 10.0
@@ -76,6 +87,7 @@ class ForceMode(object):
         self.gain_scaling = min(max(float(gain_scaling), 0.0), 2.0)
         self.velocity = np.zeros(6)   # in the force frame: m/s, rad/s
         self.tcp_velocity = np.zeros(3)
+        self.frame = self.task_frame[:3, :3]  # the force frame of the last step (3x3, base axes)
 
     def force_frame(self, tcp_position):
         """The rotation (3x3, base axes) of the force frame, by `frame_type`."""
@@ -104,7 +116,7 @@ class ForceMode(object):
 
         `external_wrench`: the robot's own TCP wrench in base axes (what the world exerts on the tool).
         """
-        frame = self.force_frame(tcp_position)
+        frame = self.frame = self.force_frame(tcp_position)
         external = np.asarray(external_wrench, dtype=float)
         applied = -np.concatenate((frame.T.dot(external[:3]), frame.T.dot(external[3:])))
         error = self.gain_scaling * (self.wrench - applied)
@@ -127,3 +139,46 @@ def displaced(pose, linear, angular):
         moved[:3, :3] = rotation_matrix(angular).dot(moved[:3, :3])
     return moved
 
+
+
+def _in_frame(frame, six):
+    """A 6-vector (linear, angular) of base axes in the axes of `frame` (3x3), or back with frame.T."""
+    return np.concatenate((frame.T.dot(six[:3]), frame.T.dot(six[3:])))
+
+
+def lead(frame, selection, pose, actual):
+    """How far `pose` is ahead of `actual` (4x4 TCP poses) along the compliant axes: a 6-vector in the
+    force frame's axes (m, rad), zero on the other axes."""
+    ahead = _in_frame(frame, pose_error(pose, actual))
+    ahead[~selection] = 0.0
+    return ahead
+
+
+def back(frame, ahead):
+    """(linear, angular) displacement in base axes that takes a pose back by `ahead` (lead()): moved by
+    it (displaced()), the pose is where the TCP is along the compliant axes."""
+    behind = -_in_frame(frame.T, ahead)
+    return behind[:3], behind[3:]
+
+
+def uncoupled(jacobian, stiffness, frame, selection, ahead):
+    """(linear, angular) displacement in base axes of the target's non-compliant axes that cancels their
+    pull from the compliant axes' lead.
+
+    Joint servos of `stiffness` (N m/rad, one per joint) pulling towards a target `ahead` (lead()) of
+    the TCP pull with K J^-1 (the Cartesian stiffness J^-T K J^-1 times the lead); that stiffness
+    couples the axes, so a lead along z pulls across too. Moved by this, the target pulls along the
+    compliant axes alone, as hard as the servos' stiffness there with the other axes held.
+    `jacobian`: the TCP's 6xN geometric Jacobian (base axes).
+    """
+    rotation = np.zeros((6, 6))
+    rotation[:3, :3] = rotation[3:, 3:] = frame
+    pulled = np.linalg.solve(jacobian.T, np.linalg.solve(jacobian, rotation) * stiffness[:, None])
+    cartesian = rotation.T.dot(pulled)  # R^T J^-T K J^-1 R: the servos' stiffness in the force frame
+    held = ~selection
+    shift = np.zeros(6)
+    if not held.any() or not selection.any():
+        return shift[:3], shift[3:]
+    shift[held] = -np.linalg.solve(cartesian[np.ix_(held, held)], cartesian[np.ix_(held, selection)].dot(ahead[selection]))
+    base = rotation.dot(shift)
+    return base[:3], base[3:]

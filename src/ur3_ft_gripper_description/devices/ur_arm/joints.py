@@ -82,6 +82,7 @@ class KinematicJoints(object):
         self.servo_lag = float(servo_lag)
         self.protective_stop = None
         self.flange_wrench = None
+        self.stiffness = None  # rigid: no servo gives
 
     @classmethod
     def from_settings(cls, settings):

@@ -63,6 +63,11 @@ class PhysicsJointMotion(object):
         return self.cell.arm_effort
 
     @property
+    def stiffness(self):
+        """The position servos' stiffness (N m/rad, one per joint): how far each gives under a torque."""
+        return self.cell.arm_stiffness
+
+    @property
     def flange_wrench(self):
         return self.cell.flange_wrench()
 

@@ -208,20 +208,43 @@ class ScriptRobot(object):
         target = self.planned
         if self.force is not None or not np.allclose(self.force_offset, np.eye(4)):
             tcp = self.core.tcp
-            pose = tm.tcp_pose(arm, tcp, self.planned)
             if self.force is not None:
                 external = self.core.tcp_force()[0]
-                linear, angular = self.force.step(dt, self.force_offset[:3, 3] + pose[:3, 3], external)
+                position = self.force_offset[:3, 3] + tm.tcp_pose(arm, tcp, self.planned)[:3, 3]
+                linear, angular = self.force.step(dt, position, external)
                 self.force_offset = fm.displaced(self.force_offset, linear, angular)
-            pose[:3, 3] += self.force_offset[:3, 3]
-            pose[:3, :3] = self.force_offset[:3, :3].dot(pose[:3, :3])
-            target = arm.inverse(pose.dot(rigid_inverse(tcp)), self.commanded)
-            if target is None:
-                raise RuntimeFault('force_mode: the pose it asks for is out of the arm\'s reach')
+            pose = self._displaced_pose()
+            stiffness = self.core.motion.stiffness
+            if self.force is None or stiffness is None:
+                target = self._reach(pose)
+            else:
+                # Joint servos that give: what the admittance asks beyond where its motion takes the TCP
+                # pulls along the compliant axes only (force_mode.py).
+                actual = self.core.actual_state()[0]
+                frame = self.force.frame
+                travel = self.force.velocity * dt
+                going = fm.displaced(tm.tcp_pose(arm, tcp, actual), frame.dot(travel[:3]), frame.dot(travel[3:]))
+                ahead = fm.lead(frame, self.force.selection, pose, going)
+                shift = fm.uncoupled(arm.jacobian(actual, tcp), stiffness, frame, self.force.selection, ahead)
+                target = self._reach(fm.displaced(pose, *shift))
         if dt > 0:
             self.commanded_speed = (target - self.commanded) / dt
         self.commanded = np.array(target, dtype=float)
         return self.commanded
+
+    def _displaced_pose(self):
+        """The TCP's pose the program plans, displaced by force mode (4x4, base axes)."""
+        pose = tm.tcp_pose(self.core.arm, self.core.tcp, self.planned)
+        pose[:3, 3] += self.force_offset[:3, 3]
+        pose[:3, :3] = self.force_offset[:3, :3].dot(pose[:3, :3])
+        return pose
+
+    def _reach(self, pose):
+        """Joint positions putting the TCP at `pose`, from the last command."""
+        target = self.core.arm.inverse(pose.dot(rigid_inverse(self.core.tcp)), self.commanded)
+        if target is None:
+            raise RuntimeFault('force_mode: the pose it asks for is out of the arm\'s reach')
+        return target
 
     # -- calls -------------------------------------------------------------------------------------
 
@@ -325,8 +348,17 @@ class ScriptRobot(object):
         self.force = force
 
     def _end_force_mode(self):
-        """The arm stays where force mode brought it (the displacement is kept until the next motion)."""
-        self.force = None
+        """The arm stays where force mode brought it (the displacement is kept until the next motion).
+
+        On joint servos that give, that is where the TCP is along the compliant axes: the push ends.
+        """
+        force, self.force = self.force, None
+        if force is None or self.core.motion.stiffness is None:
+            return
+        pose = self._displaced_pose()
+        ahead = fm.lead(force.frame, force.selection, pose, tm.tcp_pose(self.core.arm, self.core.tcp,
+                                                                        self.core.actual_state()[0]))
+        self.force_offset = fm.displaced(self.force_offset, *fm.back(force.frame, ahead))
 
     def _force_mode_set_damping(self, damping):
         self.force_damping = min(max(float(damping), 0.0), 1.0)
