@@ -24,7 +24,7 @@ scales the force error. In free air the robot thus accelerates to the speed
 limit, as URSim does; in contact it settles where the world pushes back with
 the commanded wrench. The virtual mass is chosen so that the tool settles
 on the physics cell's stiffest contacts without bouncing at either control
-period (bench/force_mode.py measures it).
+period (test/physics/test_force_mode.py settles it at both).
 
 Nothing here moves the arm: `step` gives the displacement of the TCP for one
 control cycle, which the core adds to what the program commands.
