@@ -61,6 +61,8 @@ from ..physics import link
 from . import cartesian
 from . import core as arm_core
 from . import joints
+from ..network import dashboard as network_dashboard
+from ..network import listen
 from .dashboard import DashboardServices
 from .settings import PARAMETERS, read_settings
 from .trajectory import GoalError, JointTolerance, Point
@@ -169,6 +171,18 @@ class ArmSim(object):
             server.start()
         self.set_mode.start()
         self.action_status = ActionStatus(servers + [self.set_mode.action_server])
+
+        # -- the controller's own network interfaces, on the same core and lock as the ROS interface
+        self.network = []
+        if settings.robot_ip:
+            self.network.append(network_dashboard.serve(
+                settings.robot_ip, lambda command: self._call(core.dashboard, command), rospy.logwarn))
+            if not listen.is_loopback(settings.robot_ip):
+                rospy.logwarn('%s: the controller\'s network interfaces listen on %s, beyond this machine'
+                              % (NODE, settings.robot_ip))
+        for server in self.network:
+            threading.Thread(target=server.serve_forever, name=server.name, daemon=True).start()
+            rospy.loginfo('%s: %s on %s:%d' % (NODE, server.name, *server.server_address[:2]))
 
     # -- calling the core --------------------------------------------------------------------
 
@@ -434,9 +448,11 @@ def main():
         from ..physics.world import WorldError
         try:
             sim = ArmSim(rospy)
-        except (sim_params.ParamError, MissingMuJoCo, WorldError, DescriptionError) as exc:
+        except (sim_params.ParamError, MissingMuJoCo, WorldError, DescriptionError, listen.ListenError) as exc:
             rospy.logfatal('%s: %s' % (NODE, exc))
             return 1
+        for server in sim.network:
+            rospy.on_shutdown(server.shutdown)
         if sim.clock is not None:
             return node_loop.run_as_clock(rospy, sim.clock, sim.step)
         # The wall clock: each cycle as long as the time since the last, at most ten periods.

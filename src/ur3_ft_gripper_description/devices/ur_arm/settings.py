@@ -13,6 +13,7 @@ import math
 import numpy as np
 
 from .. import sim_clock, sim_params
+from ..network import listen
 from ..physics import arm_cell
 from . import controller_manager as cm
 from . import robot_state as rs
@@ -37,6 +38,16 @@ def selectable_mode(name, value):
 def words(name, value):
     """Names separated by spaces; empty: none."""
     return str(value).split() if value else []
+
+
+def robot_ip(name, value):
+    """An IPv4 address, or empty for no network interfaces."""
+    if value in ('', None):
+        return ''
+    try:
+        return listen.checked_address(value)
+    except listen.ListenError as exc:
+        raise sim_params.ParamError('%s=%s' % (name, exc)) from None
 
 
 PARAMETERS = (
@@ -64,6 +75,9 @@ PARAMETERS = (
                      sim_params.flag),
     sim_params.Param('~headless_mode', False, "As ur_robot_driver's: resend_robot_program starts the program "
                      '(true) or dashboard play does (false)', sim_params.flag),
+    sim_params.Param('~robot_ip', '', "The controller's own network interfaces (the Dashboard Server on 29999) "
+                     'listen on this IPv4 address, e.g. 127.0.0.1, or 127.0.0.2 for a second cell on the machine; '
+                     'empty: none', robot_ip),
 ) + arm_cell.PARAMETERS + sim_clock.PARAMETERS
 
 
@@ -125,4 +139,5 @@ def read_settings(get_param):
                                    headless=param('~headless_mode'))
     # The installation's payload: what the model mounts on the flange, as a user enters it on the teach pendant.
     settings.robot.payload = mounted_payload(description, settings.prefix + FLANGE)
+    settings.robot_ip = param('~robot_ip')
     return settings

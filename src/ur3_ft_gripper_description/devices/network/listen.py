@@ -1,0 +1,71 @@
+"""Where a network face listens, and the one line a user reads when it cannot.
+
+A face listens on loopback unless the user names another address: the
+robot's own port numbers on 127.0.0.1 by default, and other cells on the
+same machine on other loopback addresses (127.0.0.2, ...), which Linux
+serves without any set-up, as a second robot on the network has its own IP
+address. Nothing here starts a thread.
+"""
+
+import errno
+import ipaddress
+import socketserver
+import sys
+
+LOOPBACK = '127.0.0.1'
+
+
+class ListenError(RuntimeError):
+    """A face that cannot listen: one line naming the address, the problem and the fix."""
+
+
+def checked_address(text):
+    """`text` as an IPv4 address string (a host name is refused: the robot's IP is a number)."""
+    try:
+        return str(ipaddress.IPv4Address(str(text).strip()))
+    except ValueError:
+        raise ListenError('%r is not an IPv4 address: give the simulated controller one, e.g. %s (this machine '
+                          'only) or 127.0.0.2 for a second cell' % (text, LOOPBACK)) from None
+
+
+def is_loopback(address):
+    return ipaddress.IPv4Address(address).is_loopback
+
+
+class ThreadingServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
+    """A TCP server with a thread per client, which never keeps the process alive on its own.
+
+    A client's session that fails logs one line through `log` and ends that connection alone.
+    """
+
+    daemon_threads = True
+    allow_reuse_address = True  # a restarted cell takes its ports back at once, as the robot's controller does
+
+    def __init__(self, name, log, server_address, handler):
+        self.name, self.log = name, log
+        super().__init__(server_address, handler)
+
+    def handle_error(self, request, client_address):
+        error = sys.exc_info()[1]
+        if isinstance(error, ConnectionError):
+            return  # the client went away mid-reply, as clients do
+        self.log('%s: the session of %s:%d failed: %s: %s; its connection is closed'
+                 % (self.name, client_address[0], client_address[1], type(error).__name__, error))
+
+
+def serve(name, address, port, handler, log):
+    """A ThreadingServer of `handler` at (address, port), bound and listening; ListenError naming `name`."""
+    try:
+        return ThreadingServer(name, log, (address, port), handler)
+    except OSError as exc:
+        if exc.errno == errno.EADDRINUSE:
+            fix = ('another simulated or real controller has it: give this cell its own address, e.g. '
+                   '127.0.0.2 (robot_ip:=, or sim_robot_ip:= in the bring-up)')
+        elif exc.errno == errno.EADDRNOTAVAIL:
+            fix = 'this machine has no such address: use %s, or one of its own (ip address)' % LOOPBACK
+        elif exc.errno == errno.EACCES:
+            fix = 'ports under 1024 need privileges'
+        else:
+            fix = 'check the address'
+        raise ListenError('%s cannot listen on %s:%d: %s; %s' % (name, address, port, exc.strerror or exc, fix)) \
+            from None
