@@ -71,7 +71,8 @@ def test_a_client_is_greeted_and_the_robot_answers_and_obeys(served):
     assert client.ask('robotmode') == 'Robotmode: POWER_OFF'
     assert client.ask('power on') == 'Powering on'
     assert client.ask('brake release') == 'Brake releasing'
-    assert client.ask('PolyscopeVersion').startswith('URSoftware 5.')
+    assert client.ask('PolyscopeVersion') == 'URSoftware %s' % core.software.version_text
+    assert client.ask('safetystatus') == 'Safetystatus: NORMAL'
     assert client.ask('no such command') == "could not understand: 'no such command'"
     assert client.ask('quit') == 'Disconnected'
     assert client.closed()

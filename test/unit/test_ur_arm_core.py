@@ -120,7 +120,7 @@ def test_each_model_reports_its_generation(configured_model, ur_type):
         assert 'only available for e-Series robots' in message and '%d.%d.%d' % version[:3] in message
     remote = core.dashboard('is in remote control')
     assert (remote == 'true') == (generation == 'e-Series'), remote
-    assert core.dashboard('PolyScopeVersion') == 'URSoftware %d.%d.%d' % version[:3]
+    assert core.dashboard('PolyScopeVersion') == 'URSoftware %d.%d.%d.%d' % version
 
 
 def test_ur20_and_ur30_run_e_series_software():

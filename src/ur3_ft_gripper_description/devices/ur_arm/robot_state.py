@@ -296,6 +296,8 @@ class RobotState(object):
             return 'Robotmode: %s' % self.robot_mode
         if key == 'safetymode':
             return 'Safetymode: %s' % self.safety_mode
+        if key == 'safetystatus':  # CB3 3.11 and e-Series 5.4 on: the safety mode under its newer name
+            return 'Safetystatus: %s' % self.safety_mode
         if key == 'running':
             return 'Program running: %s' % ('true' if self.program_state == PLAYING else 'false')
         if key == 'programstate':

@@ -47,8 +47,8 @@ class ControllerSoftware(object):
 
     @property
     def version_text(self):
-        """major.minor.bugfix, as the Dashboard Server prints it."""
-        return '.'.join(str(v) for v in self.version[:3])
+        """major.minor.bugfix.build, as the Dashboard Server prints it (clients parse all four)."""
+        return '.'.join(str(v) for v in self.version)
 
     def zero_ftsensor_refusal(self):
         """Why zero_ftsensor is refused (ur_robot_driver's message), or None where it is served."""
