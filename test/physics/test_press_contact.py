@@ -50,6 +50,9 @@ SLIDING = 0.001     # m/s: a tool contact slower than this sticks (measured: und
 SHARE = (0.4, 0.6)  # each pad's part of the normal force in a symmetric contact (measured: 0.45 to 0.55)
 SIDEWAYS = 0.05     # of the normal force: what a symmetric contact that does not slide may carry sideways
 GENTLE = 0.005      # m/s: a landing that leaves no sideways push behind (measured: 2 to 4 % at 10 to 40 N)
+# Of the normal force: what the example's own landing (5 cm/s) leaves sideways (measured 3 to 7 %); the
+# servos' coupled pull that force_mode.uncoupled cancels made 39 to 45 %.
+LANDED = 0.10
 COMPLIANT_XY = force_mode_press.PROGRAM.replace('[0, 0, 1, 0, 0, 0]', '[1, 1, 1, 0, 0, 0]')
 
 
@@ -179,9 +182,11 @@ def test_pressing_straight_down_the_sensors_read_the_sideways_force_the_contacts
     result = press().run(force_mode_press.PROGRAM, force)
     print('z compliant: ' + describe(force, result))
     check_sensors(force, result)
-    # The tool sticks where it touched, on both pads alike: the sideways force is static friction.
+    # The tool sticks where it landed, pivoted a little about its pads (which then share the load
+    # unevenly, measured 0.57 to 0.61): the sideways force is static friction, what the landing left.
     assert result['slip'] < SLIDING and result['moved'] < 1e-4, describe(force, result)
-    assert symmetric(result), describe(force, result)
+    for reading in (result['ft300'], result['robot'], result['contact']):
+        assert sideways(reading) < LANDED * result['contact'][2], describe(force, result)
 
 
 @pytest.mark.parametrize('force', FORCES)
