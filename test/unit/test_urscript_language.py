@@ -281,7 +281,7 @@ def test_a_block_without_end_is_a_syntax_error():
     ('def f():\n  x = 1\nend\nend\n', 'line 4: unexpected "end"'),
     ('x = 1\nif x > 0\n  x = 2\nend\n', 'line 2: unexpected end of line'),  # no ':'
     ('x = [1, 2\ny = 3\n', 'line 2: unexpected "y"'),
-    ('x = 3 $ 4\n', 'line 1: unexpected character "$"'),
+    ('x = 3 $ 4\n', 'line 1: a program label ($ 3 "MoveJ") must stand on a line of its own'),
     ('def f():\n  frobnicate(1)\nend\n', "line 2: name 'frobnicate' is not defined"),
     ('textmsg(y)\n', "line 1: name 'y' is not defined"),
     ('def f():\n  movep(p[0, 0, 0, 0, 0, 0])\nend\n', 'line 2: movep is a URScript function the simulated robot '
@@ -337,3 +337,161 @@ def test_a_robot_refusal_is_a_runtime_error_on_the_calls_line():
             raise ValueError('movej: joint 2 out of range')
     run, _, _ = run_to_end('x = 1\nmovej([0, 0, 9, 0, 0, 0])\n', Robot())
     assert (run.error.line, run.error.text) == (2, 'movej: joint 2 out of range')
+
+
+# --- what PolyScope and the drivers write ---------------------------------------------------
+
+POLYSCOPE = '''$ 1 "Robot Program"
+def Program():
+  global n = 0
+  $ 2 "Thread_1"
+  thread Thread_1():
+    $ 3 "Thread_1" "noBreak"
+    n = n + 1
+  end
+  $ 4 "BeforeStart"
+  h = run Thread_1()
+  join h
+  while n < 3:
+    $ 5 "Loop n<3"
+    $ 6 "n≔n+1" "breakAfter"
+    n = n + 1
+  end
+  if n == 3:
+    $ 7 "If n≟3"
+    textmsg("n ", n)
+  end
+end
+'''
+
+
+def test_program_labels_mark_lines_and_change_nothing():
+    program = compile_script(POLYSCOPE, SERVED)
+    assert program.name == 'Program'  # a label before the def keeps it the program
+    run, robot, _ = run_to_end(POLYSCOPE)
+    assert run.error is None and robot.log == ['n 3']
+    stripped = '\n'.join('' if line.strip().startswith('$') else line for line in POLYSCOPE.splitlines())
+    assert robot.calls == run_to_end(stripped)[1].calls
+
+
+@pytest.mark.parametrize('text, message', [
+    ('x = 1\ntextmsg(x) $ 2 "textmsg"\n', 'line 2: a program label ($ 3 "MoveJ") must stand on a line of its own'),
+    ('x = [1,\n  $ 2 "Assignment"\n  2]\n', 'line 2: a program label ($ 3 "MoveJ") cannot stand inside brackets'),
+    ('x = 1\n$ "MoveJ"\n', 'line 2: a program label is "$", its number, then its text: $ 3 "MoveJ"'),
+    ('x = 1\nenter_critical\nx = 2\n', 'line 2: enter_critical without an exit_critical after it in its block'),
+    ('x = 1\nexit_critical\n', 'line 2: exit_critical without an enter_critical before it in its block'),
+    ('x = 1\nif x > 0:\n  enter_critical\n  x = 2\nend\nexit_critical\n',
+     'line 3: enter_critical without an exit_critical after it in its block'),
+    ('enter_critical\nwhile True:\n  exit_critical\n  enter_critical\nend\nexit_critical\n',
+     'line 3: exit_critical without an enter_critical before it in its block'),
+    ('enter_critical = 1\n', 'line 1: unexpected "="'),
+])
+def test_misplaced_labels_and_unbalanced_critical_sections_are_refused_in_one_line(text, message):
+    error = compile_error(text)
+    assert str(error) == message and '\n' not in str(error)
+
+
+CRITICAL = '''global ticks = 0
+thread ticker():
+  while True:
+    ticks = ticks + 1
+    sync()
+  end
+end
+t = run ticker()
+sync()
+%s
+seen_before = ticks
+i = 0
+while i < 3000:
+  i = i + 1
+end
+seen_after = ticks
+%s
+sync()
+kill t
+'''
+
+
+@pytest.mark.parametrize('critical', [True, False])
+def test_a_critical_section_keeps_other_threads_from_running_between_its_statements(critical):
+    enter, leave = ('enter_critical', 'exit_critical') if critical else ('', '')
+    run = Run(compile_script(CRITICAL % (enter, leave), SERVED), CellRobot(), budget=2000)
+    cycles = 0
+    while not run.finished:
+        run.step(DT)
+        cycles += 1
+    assert run.error is None
+    # Frames: main reaches its sync(), counts over several (2000 instructions a frame), then syncs and
+    # kills the ticker. Between its two reads the ticker would tick once a frame but the last.
+    computing_frames = cycles - 2
+    assert computing_frames >= 3
+    ticked = run.globals['seen_after'] - run.globals['seen_before']
+    assert ticked == (0 if critical else computing_frames - 1)
+
+
+def test_physical_time_inside_a_critical_section_lets_the_others_run():
+    text = ('global ticks = 0\nthread ticker():\n  while True:\n    ticks = ticks + 1\n    sync()\n  end\nend\n'
+            't = run ticker()\nenter_critical\nbefore = ticks\nsleep(10 * %r)\nafter = ticks\nexit_critical\n'
+            'kill t\n' % DT)
+    run, _, _ = run_to_end(text)
+    assert run.error is None and run.globals['after'] - run.globals['before'] == 10
+
+
+def test_return_and_break_leave_the_critical_sections_they_are_in():
+    text = '''global ticks = 0
+thread ticker():
+  while True:
+    ticks = ticks + 1
+    sync()
+  end
+end
+def first_of(values):
+  enter_critical
+  while True:
+    enter_critical
+    if True:
+      break
+    end
+    exit_critical
+  end
+  if get_list_length(values) > 0:
+    return values[0]
+  end
+  exit_critical
+  return -1
+end
+t = run ticker()
+sync()
+x = first_of([7, 8])
+seen_before = ticks
+i = 0
+while i < 3000:
+  i = i + 1
+end
+seen_after = ticks
+kill t
+'''
+    run = Run(compile_script(text, SERVED), CellRobot(), budget=2000)
+    while not run.finished:
+        run.step(DT)
+    assert run.error is None and run.globals['x'] == 7
+    # Nothing holds the ticker off any more: it ticks in the frames the count spans.
+    assert run.globals['seen_after'] - run.globals['seen_before'] >= 3
+    assert run.main.critical == 0
+
+
+def test_a_statement_continues_inside_brackets_and_a_block_can_share_its_line():
+    text = ('movej([0, -1.57,  # base, shoulder\n'
+            '       0, 0, 0, 0], a=1.2,\n'
+            '      v=0.5)\n'
+            'n = 0 + (1 +\n'
+            '   2)\n'
+            'if n == 3: textmsg("three") elif n == 4: textmsg("four") else: textmsg("other") end\n'
+            'while n > 0: n = n - 1 end\n'
+            'x = [1, 2][n + 2]\n')
+    run, robot, _ = run_to_end(text)
+    assert robot.calls[0] == ('movej', [[0, -1.57, 0, 0, 0, 0]], {'a': 1.2, 'v': 0.5})
+    assert robot.log == ['three'] and run.globals['n'] == 0
+    # Lines keep their numbers past the continued ones: the index error is on line 8.
+    assert (run.error.line, run.error.text) == (8, 'Index out of bounds: index 2, length 2')

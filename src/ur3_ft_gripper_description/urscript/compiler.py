@@ -10,6 +10,11 @@ thread, `local x = ...` is local, `global x = ...` global, and a variable
 without either is global when the program has a global of that name and
 local otherwise. Functions do not see the locals of the functions they sit
 in. Parameters are locals.
+
+Critical sections (`enter_critical` ... `exit_critical`) open and close in
+the same block, so that every path through the code closes what it opened;
+`break`, `continue` and `return` close the sections they leave. Program
+labels (`$ 3 "MoveJ"`) give no code: the robot only reports them.
 """
 
 from . import functions
@@ -18,7 +23,7 @@ from .parser import CompileError
 # Instructions: (opcode, argument); lines and columns beside them.
 (CONST, LOAD_L, LOAD_G, STORE_L, STORE_G, BINARY, UNARY, JUMP, JUMP_FALSE, AND_JUMP, OR_JUMP, XOR,
  INDEX, STORE_INDEX_L, STORE_INDEX_G, LIST, POSE, CALL_SCRIPT, CALL_PURE, CALL_ROBOT, SLEEP, SYNC,
- RETURN, POP, HALT, RUN, JOIN, KILL, JUMP_IF_SET) = range(29)
+ RETURN, POP, HALT, RUN, JOIN, KILL, JUMP_IF_SET, ENTER_CRITICAL, EXIT_CRITICAL) = range(31)
 
 
 class Code(object):
@@ -98,6 +103,7 @@ def program_shape(items):
     Anything else is a program of bare statements, as the robot wraps them:
     top-level defs and threads are its definitions, the rest runs in order.
     """
+    items = [n for n in items if n.kind != 'label']
     kinds = [n.kind for n in items]
     if items and kinds[0] in ('def', 'sec') and (
             len(items) == 1 or (len(items) == 2 and _is_program_call(items[1], items[0].a))):
@@ -118,6 +124,7 @@ class Compiler(object):
         self.manual = manual
         self.secondary = False
         self.globals = set()
+        self.critical = []  # the enter_critical statements open where the code being compiled stands
 
     # --- first pass: definitions and global names ---------------------------------
 
@@ -179,7 +186,7 @@ class Compiler(object):
     def compile_body(self, code, body, scope, local_names):
         for name in sorted(local_names):
             code.slot(name)
-        self.code, self.scope, self.local_names, self.loops = code, scope, local_names, []
+        self.code, self.scope, self.local_names, self.loops, self.critical = code, scope, local_names, [], []
         self.block(body)
         code.emit(CONST, None, _last(body, code))
         code.emit(RETURN, None, _last(body, code))
@@ -195,11 +202,11 @@ class Compiler(object):
         for p in params:
             code.slot(p)
         code.params = [(p, default is not None) for p, default in node.b]
-        saved = (self.code, self.scope, self.local_names, self.loops)
+        saved = (self.code, self.scope, self.local_names, self.loops, self.critical)
         local_names = self.locals_of(node.c, code, params)
         for name in sorted(local_names):
             code.slot(name)
-        self.code, self.scope, self.local_names, self.loops = code, scope, local_names, []
+        self.code, self.scope, self.local_names, self.loops, self.critical = code, scope, local_names, [], []
         for p, default in node.b:
             if default is not None:
                 jump = code.emit(JUMP_IF_SET, None, default)
@@ -209,7 +216,7 @@ class Compiler(object):
         self.block(node.c)
         code.emit(CONST, None, _last(node.c, node))
         code.emit(RETURN, None, _last(node.c, node))
-        self.code, self.scope, self.local_names, self.loops = saved
+        self.code, self.scope, self.local_names, self.loops, self.critical = saved
         return code
 
     def compile_definitions(self, scope):
@@ -220,15 +227,34 @@ class Compiler(object):
                 self.compile_definitions(entry[1])
 
     def block(self, body):
+        opened = len(self.critical)
         for node in body:
+            if node.kind == 'exit_critical' and len(self.critical) == opened:
+                raise CompileError('exit_critical without an enter_critical before it in its block',
+                                   node.line, node.column)
             self.statement(node)
+        if len(self.critical) > opened:
+            unclosed = self.critical[opened]
+            raise CompileError('enter_critical without an exit_critical after it in its block',
+                               unclosed.line, unclosed.column)
+
+    def close_critical(self, down_to, node):
+        """Code closing the critical sections a jump out of them leaves."""
+        for _ in range(len(self.critical) - down_to):
+            self.code.emit(EXIT_CRITICAL, None, node)
 
     def statement(self, node):
         code = self.code
         kind = node.kind
-        if kind in ('def', 'thread'):
-            return  # compiled on their own
-        if kind == 'expr':
+        if kind in ('def', 'thread', 'label'):
+            return  # compiled on their own; a label only marks the line for the pendant
+        if kind == 'enter_critical':
+            self.critical.append(node)
+            code.emit(ENTER_CRITICAL, None, node)
+        elif kind == 'exit_critical':
+            self.critical.pop()
+            code.emit(EXIT_CRITICAL, None, node)
+        elif kind == 'expr':
             self.expr(node.a)
             code.emit(POP, None, node)
         elif kind in ('assign', 'local_assign', 'global_assign'):
@@ -254,15 +280,16 @@ class Compiler(object):
             top = code.here()
             self.expr(node.a)
             leave = code.emit(JUMP_FALSE, None, node.a)
-            self.loops.append((top, []))
+            self.loops.append((top, [], len(self.critical)))
             self.block(node.b)
             code.emit(JUMP, top, node)
-            _, breaks = self.loops.pop()
+            _, breaks, _ = self.loops.pop()
             for at in [leave] + breaks:
                 code.patch(at, code.here())
         elif kind in ('break', 'continue'):
             if not self.loops:
                 raise CompileError('"%s" outside a loop' % kind, node.line, node.column)
+            self.close_critical(self.loops[-1][2], node)
             if kind == 'break':
                 self.loops[-1][1].append(code.emit(JUMP, None, node))
             else:
@@ -276,6 +303,7 @@ class Compiler(object):
                 if code.kind == 'program':
                     raise CompileError('the program returns no value', node.line, node.column)
                 self.expr(node.a)
+            self.close_critical(0, node)
             code.emit(RETURN, None, node)
         elif kind == 'halt':
             code.emit(HALT, None, node)

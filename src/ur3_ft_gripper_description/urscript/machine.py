@@ -12,6 +12,12 @@ whole frame without using physical time (a loop without sync or sleep) is
 put aside until the next frame, so it goes on there and others get their
 turn; `step` always returns after at most `budget` instructions per thread,
 a call to the robot counting for ROBOT_CALL_COST of them.
+A critical section (`enter_critical` ... `exit_critical`) keeps the others
+from running while its thread computes: a thread that spends its budget
+inside one holds the scheduler, and only it runs, in the next frames too,
+until it leaves the section. Physical time inside the section (sleep, sync,
+a blocking call) lets the others run while it waits, as the drivers' servo
+threads, which call servoj inside one, need.
 A secondary program must finish within one step: past its budget it stops
 with the error the robot gives ("Runtime is too much behind").
 
@@ -71,6 +77,7 @@ class _Thread(object):
         self.finished = False
         self.wait = None  # None, ('until', time), ('blocking', Blocking), ('sync',), ('join', _Thread)
         self.spent = False  # has used its slice in this step
+        self.critical = 0  # the critical sections it is inside
 
 
 class Run(object):
@@ -87,6 +94,7 @@ class Run(object):
         self.error = None
         self.main = _Thread(program.name or 'main', program.main)
         self.threads = [self.main]
+        self.holder = None  # the thread put aside inside a critical section: only it may run
         self.instructions = 0  # executed so far, for benchmarks
 
     @property
@@ -115,6 +123,7 @@ class Run(object):
             thread.finished = True
             thread.frames = []
         self.threads = [self.main]
+        self.holder = None
 
     def _fail(self, fault, thread):
         frame = thread.frames[-1] if thread.frames else None
@@ -139,7 +148,8 @@ class Run(object):
             for thread in list(self.threads):
                 if self.finished:
                     break
-                if thread.finished or thread.spent or not self._ready(thread):
+                held_off = self.holder is not None and self.holder is not thread
+                if thread.finished or thread.spent or held_off or not self._ready(thread):
                     continue
                 if self.finished:
                     break
@@ -175,6 +185,8 @@ class Run(object):
     def _execute(self, thread):
         try:
             self._run(thread)
+            interrupted = thread.spent and thread.wait is None and not thread.finished
+            self.holder = thread if interrupted and thread.critical else None
         except RuntimeFault as fault:
             self._fail(fault, thread)
         except RecursionError:
@@ -339,6 +351,10 @@ class Run(object):
                 thread.spent = True
                 self.instructions += self.budget - left
                 return
+            elif op == C.ENTER_CRITICAL:
+                thread.critical += 1
+            elif op == C.EXIT_CRITICAL:
+                thread.critical -= 1
             elif op == C.JUMP_IF_SET:
                 if frame.locals[arg[0]] is not UNSET:
                     frame.pc = arg[1]
@@ -376,6 +392,8 @@ class Run(object):
     def _thread_ended(self, thread):
         thread.finished = True
         thread.frames = []
+        if self.holder is thread:
+            self.holder = None
         if thread is self.main:
             self._end()
 

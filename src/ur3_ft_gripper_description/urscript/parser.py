@@ -8,6 +8,7 @@ lark-parser 0.8.1 (Ubuntu 20.04) and lark 1.1.x (22.04, 24.04, Debian 12).
 """
 
 import os
+import re
 
 import lark
 
@@ -30,7 +31,11 @@ _CHAINS = frozenset(['or_expr', 'xor_expr', 'and_expr', 'sum', 'term', 'comparis
 
 KEYWORDS = frozenset(['def', 'sec', 'thread', 'end', 'if', 'elif', 'else', 'while', 'return', 'break',
                       'continue', 'halt', 'run', 'join', 'kill', 'local', 'global', 'and', 'or', 'xor',
-                      'not', 'True', 'False'])
+                      'not', 'True', 'False', 'enter_critical', 'exit_critical'])
+
+# PolyScope's program label: "$", the line's number in the program tree, then its texts in quotes.
+LABEL_FORM = re.compile(r'\$[ \t]*\d+\b')
+LABEL_EXAMPLE = '$ 3 "MoveJ"'
 
 
 class CompileError(ValueError):
@@ -59,13 +64,25 @@ class Node(object):
 
 
 class _BracketNewlines(object):
-    """Post-lexer: a newline inside (...) or [...] continues the expression."""
+    """Post-lexer: a newline inside (...) or [...] continues the expression; a program label stands alone.
 
-    always_accept = ('_NL',)  # the contextual lexer must still see them
+    The manual: a label line has "$" as its first symbol; anywhere else the robot refuses it.
+    """
+
+    always_accept = ('_NL', 'LABEL')  # the contextual lexer must still see them
 
     def process(self, stream):
         depth = 0
+        line_start = True
         for token in stream:
+            if token.type == 'LABEL':
+                if depth:
+                    raise CompileError('a program label (%s) cannot stand inside brackets' % LABEL_EXAMPLE,
+                                       token.line, token.column)
+                if not line_start:
+                    raise CompileError('a program label (%s) must stand on a line of its own' % LABEL_EXAMPLE,
+                                       token.line, token.column)
+            line_start = token.type == '_NL'
             if token.type == '_NL':
                 if depth:
                     continue
@@ -174,8 +191,13 @@ def _build(t):
         return Node('expr', line, column, _build(ch[0]))
     if kind == 'return_stmt':
         return Node('return', line, column, _build(ch[0]) if ch else None)
-    if kind in ('break_stmt', 'continue_stmt', 'halt_stmt'):
+    if kind in ('break_stmt', 'continue_stmt', 'halt_stmt', 'enter_critical_stmt', 'exit_critical_stmt'):
         return Node(kind[:-len('_stmt')], line, column)
+    if kind == 'label':
+        if not LABEL_FORM.match(str(ch[0])):
+            raise CompileError('a program label is "$", its number, then its text: %s' % LABEL_EXAMPLE,
+                               line, column)
+        return Node('label', line, column)
     if kind in ('join_stmt', 'kill_stmt'):
         return Node(kind[:-len('_stmt')], line, column, _build(ch[0]))
     if kind == 'if_stmt':

@@ -16,6 +16,13 @@ along its compliant axes, driven by the robot's own TCP wrench
 (tcp_wrench.py, the flange's reading on physics; zero without physics, where
 the compliant axes then run at their speed limits as in URSim).
 
+The installation header PolyScope writes first in every program is served:
+set_tcp, set_payload and set_tool_voltage change the robot; set_gravity
+takes the upright base's gravity only; the settings the simulated robot has
+no state for (INSTALLATION_SETTINGS) are checked and change nothing. The
+tool flange's settings are the e-Series' only, as on the robot.
+get_steptime() is the generation's control period (STEP_TIME).
+
 Every cycle the arm's core calls `command(dt)` for the joint positions to
 command. Errors a call can meet (an unreachable pose, a bad argument) raise
 urscript.RuntimeFault, which stops the program as the robot's runtime
@@ -30,6 +37,7 @@ from . import cartesian
 from . import force_mode as fm
 from . import tool_motion as tm
 from .arm_kinematics import rigid_inverse
+from .software import CB3, E_SERIES
 
 # IO numbering of ur_msgs/IOStates (and of the core's set_io): 0-7 standard, 8-15 configurable, 16-17 tool.
 CONFIGURABLE_OFFSET, TOOL_OFFSET = 8, 16
@@ -39,6 +47,63 @@ STEADY_SPEED = 1e-3
 # the robot decelerates the arm when its program stops.
 END_OF_PROGRAM_DECELERATION = 4.0
 A = object()  # stands for "the value of argument a" (stopl's and speedl's aRot default)
+# get_steptime(): the controller's time step (s), by generation: CB3 125 Hz, e-Series 500 Hz.
+STEP_TIME = {CB3: 0.008, E_SERIES: 0.002}
+# set_gravity(d): the simulated arm stands on its base, and its payload compensation (tcp_wrench.py)
+# takes gravity along the base's -z; a d off the base's +z by more than this (rad) is refused.
+GRAVITY_ALONG_Z = 1e-3
+
+
+class OneOf(object):
+    """The values a parameter takes, as `value in OneOf(...)`: bools and numbers apart, as URScript keeps them."""
+
+    def __init__(self, *values):
+        self.values = values
+
+    def __contains__(self, value):
+        return any(value == v and isinstance(value, bool) == isinstance(v, bool) for v in self.values)
+
+    def __repr__(self):
+        return ' or '.join(to_str(v) for v in self.values)
+
+
+class AtLeast(object):
+    """A number not below `minimum`, as `value in AtLeast(m)`."""
+
+    def __init__(self, minimum):
+        self.minimum = minimum
+
+    def __contains__(self, value):
+        return isinstance(value, (int, float)) and not isinstance(value, bool) and value >= self.minimum
+
+    def __repr__(self):
+        return 'a number >= %g' % self.minimum
+
+
+# Installation settings a program's header sets (PolyScope writes them first in every program) that
+# the simulated robot keeps no state for: nothing reads an analog domain, a tool's RS-485 or output
+# mode, the input actions or how hard a safety stop brakes. A call is checked against the manual's
+# values of each parameter, then changes nothing. The e-Series' tool flange alone has the last three.
+INSTALLATION_SETTINGS = {
+    # 0: hard, 1: soft.
+    'set_safety_mode_transition_hardness': {'type': OneOf(0, 1)},
+    # Domains: 0 current (4-20 mA), 1 voltage (0-10 V).
+    'set_analog_outputdomain': {'port': OneOf(0, 1), 'domain': OneOf(0, 1)},
+    'set_standard_analog_input_domain': {'port': OneOf(0, 1), 'domain': OneOf(0, 1)},
+    'set_tool_analog_input_domain': {'port': OneOf(0, 1), 'domain': OneOf(0, 1)},
+    'set_input_actions_to_default': {},
+}
+E_SERIES_INSTALLATION_SETTINGS = {
+    # Parity: 0 none, 1 odd, 2 even; idle times in characters.
+    'set_tool_communication': {'enabled': OneOf(False, True),
+                               'baud_rate': OneOf(9600, 19200, 38400, 57600, 115200, 1000000, 2000000, 5000000),
+                               'parity': OneOf(0, 1, 2), 'stop_bits': OneOf(1, 2), 'rx_idle_chars': AtLeast(1.0),
+                               'tx_idle_chars': AtLeast(0.0)},
+    # 0: digital outputs, 1: dual pin power.
+    'set_tool_output_mode': {'mode': OneOf(0, 1)},
+    # 1: sinking (NPN), 2: sourcing (PNP), 3: push/pull.
+    'set_tool_digital_output_mode': {'n': OneOf(0, 1), 'mode': OneOf(1, 2, 3)},
+}
 
 
 class Signature(object):
@@ -63,6 +128,11 @@ class Signature(object):
                     raise RuntimeFault('%s: argument %s is missing' % (name, param))
                 bound[param] = self.defaults[param]
         return bound
+
+
+def _installation_settings(e_series):
+    """{name: {parameter: its values}} of the header's settings this generation's robot takes."""
+    return dict(INSTALLATION_SETTINGS, **(E_SERIES_INSTALLATION_SETTINGS if e_series else {}))
 
 
 def _signatures(e_series, version):
@@ -121,11 +191,15 @@ def _signatures(e_series, version):
         'textmsg': Signature(now, 's1', 's2', s2=''),
         'popup': Signature(now, 's', 'title', 'warning', 'error', 'blocking', title='Popup', warning=False,
                            error=False, blocking=False),
+        'get_steptime': Signature(now),
+        'set_gravity': Signature(now, 'd'),
         'freedrive_mode': Signature(now),
         'end_freedrive_mode': Signature(now),
         'teach_mode': Signature(now),
         'end_teach_mode': Signature(now),
     }
+    for name, values in _installation_settings(e_series).items():
+        functions[name] = Signature(now, *values)
     if e_series:
         # The e-Series' own: its flange sensor, and force mode's gain.
         functions['zero_ftsensor'] = Signature(now)
@@ -163,6 +237,7 @@ class ScriptRobot(object):
         self.core = core
         software = core.software
         self.signatures = _signatures(software.e_series, software.version)
+        self.settings = _installation_settings(software.e_series)
         self.motion = None            # the tool_motion in progress
         self.force = None             # force_mode.ForceMode while force mode is on
         self.force_damping, self.force_gain = fm.DEFAULT_DAMPING, fm.DEFAULT_GAIN_SCALING
@@ -253,6 +328,8 @@ class ScriptRobot(object):
         if signature is None:
             raise RuntimeFault('%s is not a function of the simulated robot' % name)
         bound = signature.bind(name, args, kwargs)
+        if name in self.settings:
+            return self._installation_setting(name, bound)
         return getattr(self, '_' + name)(**bound)
 
     def _start_motion(self, motion):
@@ -445,6 +522,21 @@ class ScriptRobot(object):
         ok, message = self.core.robot.set_payload(float(mass), centre)
         if not ok:
             raise RuntimeFault('set_payload: %s' % message)
+
+    def _set_gravity(self, d):
+        direction = _floats(d, 3, 'set_gravity: d')
+        length = float(np.linalg.norm(direction))
+        if length == 0.0 or np.arccos(min(1.0, direction[2] / length)) > GRAVITY_ALONG_Z:
+            raise RuntimeFault('set_gravity: the simulated arm stands upright on its base; it takes gravity '
+                               'along the base\'s z axis only, as [0, 0, 9.82], not %s' % to_str(d))
+
+    def _installation_setting(self, name, bound):
+        for parameter, allowed in self.settings[name].items():
+            if bound[parameter] not in allowed:
+                raise RuntimeFault('%s: %s must be %r, not %s' % (name, parameter, allowed, to_str(bound[parameter])))
+
+    def _get_steptime(self):
+        return STEP_TIME[self.core.software.generation]
 
     def _zero_ftsensor(self):
         self.core.zero_ftsensor()
