@@ -171,14 +171,14 @@ def uncoupled(jacobian, stiffness, frame, selection, ahead):
     compliant axes alone, as hard as the servos' stiffness there with the other axes held.
     `jacobian`: the TCP's 6xN geometric Jacobian (base axes).
     """
+    held, pushed = np.flatnonzero(~selection), np.flatnonzero(selection)
+    if not len(held) or not len(pushed):
+        return np.zeros(3), np.zeros(3)
     rotation = np.zeros((6, 6))
     rotation[:3, :3] = rotation[3:, 3:] = frame
-    pulled = np.linalg.solve(jacobian.T, np.linalg.solve(jacobian, rotation) * stiffness[:, None])
-    cartesian = rotation.T.dot(pulled)  # R^T J^-T K J^-1 R: the servos' stiffness in the force frame
-    held = ~selection
+    along = np.linalg.inv(jacobian).dot(rotation)  # J^-1 R: joint offsets per displacement along the frame's axes
+    cartesian = along.T.dot(along * stiffness[:, None])  # R^T J^-T K J^-1 R: the servos' stiffness, force frame
     shift = np.zeros(6)
-    if not held.any() or not selection.any():
-        return shift[:3], shift[3:]
-    shift[held] = -np.linalg.solve(cartesian[np.ix_(held, held)], cartesian[np.ix_(held, selection)].dot(ahead[selection]))
+    shift[held] = -np.linalg.solve(cartesian[held][:, held], cartesian[held][:, pushed].dot(ahead[pushed]))
     base = rotation.dot(shift)
     return base[:3], base[3:]

@@ -283,12 +283,12 @@ class ScriptRobot(object):
         target = self.planned
         if self.force is not None or not np.allclose(self.force_offset, np.eye(4)):
             tcp = self.core.tcp
+            planned = tm.tcp_pose(arm, tcp, self.planned)
             if self.force is not None:
                 external = self.core.tcp_force()[0]
-                position = self.force_offset[:3, 3] + tm.tcp_pose(arm, tcp, self.planned)[:3, 3]
-                linear, angular = self.force.step(dt, position, external)
+                linear, angular = self.force.step(dt, self.force_offset[:3, 3] + planned[:3, 3], external)
                 self.force_offset = fm.displaced(self.force_offset, linear, angular)
-            pose = self._displaced_pose()
+            pose = self._displaced_pose(planned)
             stiffness = self.core.motion.stiffness
             if self.force is None or stiffness is None:
                 target = self._reach(pose)
@@ -307,9 +307,10 @@ class ScriptRobot(object):
         self.commanded = np.array(target, dtype=float)
         return self.commanded
 
-    def _displaced_pose(self):
-        """The TCP's pose the program plans, displaced by force mode (4x4, base axes)."""
-        pose = tm.tcp_pose(self.core.arm, self.core.tcp, self.planned)
+    def _displaced_pose(self, planned=None):
+        """The TCP's pose the program plans (`planned`, where the caller has it), displaced by force mode
+        (4x4, base axes)."""
+        pose = tm.tcp_pose(self.core.arm, self.core.tcp, self.planned) if planned is None else planned.copy()
         pose[:3, 3] += self.force_offset[:3, 3]
         pose[:3, :3] = self.force_offset[:3, :3].dot(pose[:3, :3])
         return pose
