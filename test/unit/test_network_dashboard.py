@@ -139,6 +139,14 @@ def test_a_taken_port_is_one_line_naming_the_fix(served):
     assert '\n' not in text and '127.0.0.1:%d' % port in text and '127.0.0.2' in text, text
 
 
+def test_an_address_this_machine_does_not_have_is_one_line_naming_the_fix():
+    # 192.0.2.1: TEST-NET-1 (RFC 5737), never a machine's own address.
+    with pytest.raises(listen.ListenError) as caught:
+        dashboard.serve('192.0.2.1', lambda command: '', print, port=0)
+    text = str(caught.value)
+    assert '\n' not in text and '192.0.2.1' in text and 'no such address' in text and '127.0.0.1' in text, text
+
+
 def test_a_second_cell_serves_the_robots_port_on_its_own_loopback_address(served):
     """Linux answers on every 127.x.y.z: two cells each take the same port on their own address."""
     _, port, _ = served
