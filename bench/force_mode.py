@@ -46,8 +46,8 @@ def new_press(loop_hz):
     from ur3_ft_gripper_description.devices.ur_arm.physics_joints import PhysicsJointMotion
     from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
     from ur3_ft_gripper_description.model import description, export, mjcf
-    sys.path.insert(0, os.path.join(benchlib.PACKAGE_DIR, 'examples'))
-    import force_mode_press
+    from ur3_ft_gripper_testing import shipped
+    force_mode_press = shipped.script('examples/force_mode_press.py')
 
     mappings = export.model_mappings()
     doc = description.expand_model(mappings)
