@@ -391,14 +391,16 @@ def test_misplaced_labels_and_unbalanced_critical_sections_are_refused_in_one_li
     assert str(error) == message and '\n' not in str(error)
 
 
-CRITICAL = '''global ticks = 0
+# A thread that counts the frames it runs in.
+TICKER = '''global ticks = 0
 thread ticker():
   while True:
     ticks = ticks + 1
     sync()
   end
 end
-t = run ticker()
+'''
+CRITICAL = TICKER + '''t = run ticker()
 sync()
 %s
 seen_before = ticks
@@ -431,22 +433,14 @@ def test_a_critical_section_keeps_other_threads_from_running_between_its_stateme
 
 
 def test_physical_time_inside_a_critical_section_lets_the_others_run():
-    text = ('global ticks = 0\nthread ticker():\n  while True:\n    ticks = ticks + 1\n    sync()\n  end\nend\n'
-            't = run ticker()\nenter_critical\nbefore = ticks\nsleep(10 * %r)\nafter = ticks\nexit_critical\n'
-            'kill t\n' % DT)
+    text = TICKER + ('t = run ticker()\nenter_critical\nbefore = ticks\nsleep(10 * %r)\nafter = ticks\nexit_critical\n'
+                     'kill t\n' % DT)
     run, _, _ = run_to_end(text)
     assert run.error is None and run.globals['after'] - run.globals['before'] == 10
 
 
 def test_return_and_break_leave_the_critical_sections_they_are_in():
-    text = '''global ticks = 0
-thread ticker():
-  while True:
-    ticks = ticks + 1
-    sync()
-  end
-end
-def first_of(values):
+    text = TICKER + '''def first_of(values):
   enter_critical
   while True:
     enter_critical
