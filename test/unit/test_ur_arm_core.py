@@ -358,6 +358,24 @@ def test_script_outputs_show_on_io_states_by_their_pin_numbers(arm):
     assert arm.robot.program_running  # a secondary program runs beside the External Control program
 
 
+def test_the_general_purpose_registers_take_the_manuals_addresses_and_values(arm):
+    arm.robot.registers.write('input', 'integer', 47, 7)
+    arm.script_command('def p():\n  write_output_integer_register(0, read_input_integer_register(47) * 6)\n'
+                       '  write_output_boolean_register(127, True)\n  write_output_float_register(47, 0.5)\nend')
+    run(arm, 2 * DT)
+    assert arm.robot.registers.output['integer'][0] == 42
+    assert arm.robot.registers.output['boolean'][127] is True
+    assert arm.robot.registers.output['float'][47] == 0.5
+    for call, problem in (('write_output_integer_register(48, 1)', 'integer register 48 does not exist'),
+                          ('write_output_integer_register(0, 2147483648)', '32-bit signed integer'),
+                          ('write_output_boolean_register(0, 1)', 'True or False'),
+                          ('read_input_float_register(-1)', 'float register -1 does not exist')):
+        arm.script_command('def p():\n  %s\nend' % call)
+        run(arm, 2 * DT)
+        level, text = arm.take_messages()[-1]
+        assert level == arm_core.ERROR and problem in text and call.split('(')[0] in text, text
+
+
 def test_movej_without_a_and_v_takes_the_manuals_default_profile(arm):
     # URScript manual: movej(q, a=1.4, v=1.05, ...). 1 rad on the leading joint is longer than
     # the ramps' v^2/a: accelerate, cruise at v, decelerate: 1/v + v/a seconds.

@@ -26,6 +26,8 @@ succeed when the answer matches what it expects.
 import collections
 import re
 
+from .registers import Registers
+
 
 # Robot mode names in ur_dashboard_msgs/RobotMode order of start-up.
 POWER_OFF, BOOTING, POWER_ON, IDLE, RUNNING = 'POWER_OFF', 'BOOTING', 'POWER_ON', 'IDLE', 'RUNNING'
@@ -102,6 +104,7 @@ class RobotState(object):
         self.analog_in = [0.0] * ANALOG_INPUTS
         self.tool_voltage = 0
         self.payload = (0.0, (0.0, 0.0, 0.0))
+        self.registers = Registers()  # shared by programs and RTDE clients
         self.log = collections.deque(maxlen=LOG_ENTRIES)
         self.popup = None
         self._target = None        # robot mode a transition is heading for

@@ -37,6 +37,7 @@ from . import cartesian
 from . import force_mode as fm
 from . import tool_motion as tm
 from .arm_kinematics import rigid_inverse
+from .registers import BOOLEAN, FLOAT, INTEGER, RegisterError
 from .software import CB3, E_SERIES
 
 # IO numbering of ur_msgs/IOStates (and of the core's set_io): 0-7 standard, 8-15 configurable, 16-17 tool.
@@ -52,6 +53,10 @@ STEP_TIME = {CB3: 0.008, E_SERIES: 0.002}
 # set_gravity(d): the simulated arm stands on its base, and its payload compensation (tcp_wrench.py)
 # takes gravity along the base's -z; a d off the base's +z by more than this (rad) is refused.
 GRAVITY_ALONG_Z = 1e-3
+# The general purpose registers' functions (registers.py): name -> (access, direction, kind).
+REGISTER_FUNCTIONS = {'%s_%s_%s_register' % (access, direction, kind): (access, direction, kind)
+                      for access, direction in (('read', 'input'), ('read', 'output'), ('write', 'output'))
+                      for kind in (BOOLEAN, INTEGER, FLOAT)}
 
 
 class OneOf(object):
@@ -200,6 +205,8 @@ def _signatures(e_series, version):
     }
     for name, values in _installation_settings(e_series).items():
         functions[name] = Signature(now, *values)
+    for name, (access, _, _) in REGISTER_FUNCTIONS.items():
+        functions[name] = Signature(now, 'address', 'value') if access == 'write' else Signature(now, 'address')
     if e_series:
         # The e-Series' own: its flange sensor, and force mode's gain.
         functions['zero_ftsensor'] = Signature(now)
@@ -331,6 +338,8 @@ class ScriptRobot(object):
         bound = signature.bind(name, args, kwargs)
         if name in self.settings:
             return self._installation_setting(name, bound)
+        if name in REGISTER_FUNCTIONS:
+            return self._register(name, **bound)
         return getattr(self, '_' + name)(**bound)
 
     def _start_motion(self, motion):
@@ -602,6 +611,17 @@ class ScriptRobot(object):
                                'get_standard_analog_in'))
 
     _get_analog_in = _get_standard_analog_in
+
+    # the general purpose registers, shared with RTDE clients
+
+    def _register(self, name, address, value=None):
+        access, direction, kind = REGISTER_FUNCTIONS[name]
+        try:
+            if access == 'read':
+                return self.core.robot.registers.read(direction, kind, address)
+            self.core.robot.registers.write(direction, kind, address, value)
+        except RegisterError as error:
+            raise RuntimeFault('%s: %s' % (name, error)) from None
 
     # the log and the rest
 
