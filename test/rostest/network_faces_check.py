@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""rostest node: the Dashboard Server on 29999 and ur_robot_driver's ROS interface drive one robot
-(network_dashboard.test). The client is written from UR's Dashboard Server document."""
+"""rostest node: the controller's network faces and ur_robot_driver's ROS interface drive one robot
+(network_faces.test): the Dashboard Server on 29999, with a client written from UR's Dashboard Server
+document, and RTDE on 30004, with the client written from UR's RTDE guide (ur3_ft_gripper_testing)."""
 import socket
 import time
 import unittest
@@ -9,14 +10,19 @@ import rospy
 import rostest
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import JointState
+from std_msgs.msg import Float64, String
 from std_srvs.srv import Trigger
+from ur_msgs.srv import SetIO
 from ur_dashboard_msgs.msg import RobotMode
 from ur_dashboard_msgs.srv import GetRobotMode
 
 from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT, Recorder, wait_for, wait_for_log
+from ur3_ft_gripper_testing.rtde_client import RtdeClient
 
 PORT = 29999
+RTDE_PORT = 30004
 NODE = '/ur_hardware_interface'
+TARGET = [0.3, -1.4, 1.3, -1.5, -1.5, 0.4]
 
 
 class Dashboard(object):
@@ -37,11 +43,11 @@ class Dashboard(object):
         self.socket.close()
 
 
-class NetworkDashboardTest(unittest.TestCase):
+class NetworkFacesTest(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls):
-        rospy.init_node('network_dashboard_check')
+        rospy.init_node('network_faces_check')
         cls.address = rospy.get_param('~robot_ip')
         cls.rosout = Recorder('/rosout', Log)
         cls.modes = Recorder(NODE + '/robot_mode', RobotMode)
@@ -89,6 +95,57 @@ class NetworkDashboardTest(unittest.TestCase):
         self.joint_states.next_after(time.monotonic())
         self.assertEqual(self.client.ask('safetymode'), 'Safetymode: NORMAL')
 
+    def rtde(self):
+        client = RtdeClient(RTDE_PORT, self.address, timeout=TIMEOUT)
+        self.assertTrue(client.negotiate(2))
+        return client
+
+    def test_4_rtde_reads_where_a_program_sent_on_ros_moved_the_joints(self):
+        self.client.ask('power on')
+        self.client.ask('brake release')
+        wait_for(lambda: self.mode_on_ros() == RobotMode.RUNNING, 'RUNNING')
+        script = rospy.Publisher(NODE + '/script_command', String, queue_size=1, latch=True)
+        script.publish(String(data='movej([%s], a=3, v=2)' % ', '.join(repr(v) for v in TARGET)))
+        wait_for(lambda: self.joint_states.latest() is not None and
+                 max(abs(a - b) for a, b in zip(self.joint_states.latest().position, TARGET)) < 1e-6,
+                 'joint_states at the program\'s target')
+        client = self.rtde()
+        client.setup_outputs(['actual_q', 'actual_qd', 'runtime_state'], 500)
+        self.assertTrue(client.start())
+        data = client.data()
+        client.close()
+        for actual, target in zip(data['actual_q'], TARGET):
+            self.assertAlmostEqual(actual, target, delta=1e-6)
+        self.assertEqual(data['actual_qd'], [0.0] * 6)
+
+    def test_5_rtde_sets_the_speed_slider_ros_publishes_and_reads_the_outputs_ros_set(self):
+        self.assertEqual(self.client.ask('play'), 'Starting program')  # the scaling is the slider's while it plays
+        client = self.rtde()
+        slider = client.setup_inputs(['speed_slider_mask', 'speed_slider_fraction'])
+        client.write(slider, {'speed_slider_mask': 1, 'speed_slider_fraction': 0.4})
+        scaling = Recorder('speed_scaling_factor', Float64)
+        wait_for(lambda: scaling.latest() is not None and abs(scaling.latest().data - 0.4) < 1e-9,
+                 'speed_scaling_factor 0.4 on ROS')
+        client.write(slider, {'speed_slider_mask': 1, 'speed_slider_fraction': 1.0})
+        set_io = rospy.ServiceProxy(NODE + '/set_io', SetIO)
+        self.assertTrue(set_io(fun=SetIO._request_class.FUN_SET_DIGITAL_OUT, pin=2, state=1.0).success)
+        client.setup_outputs(['actual_digital_output_bits'], 125)
+        self.assertTrue(client.start())
+        self.assertEqual(client.data()['actual_digital_output_bits'] & 0b100, 0b100)
+        client.close()
+
+    def test_6_bad_rtde_input_is_one_log_line_and_the_robot_goes_on(self):
+        since = time.monotonic()
+        bad = socket.create_connection((self.address, RTDE_PORT), timeout=TIMEOUT)
+        bad.sendall(b'\x00\x03X')
+        self.assertEqual(bad.recv(10), b'')
+        bad.close()
+        wait_for_log(self.rosout, NODE, Log.WARN, 'unknown type', since)
+        self.joint_states.next_after(time.monotonic())
+        client = self.rtde()
+        self.assertEqual(client.controller_version()[0], 5)
+        client.close()
+
 
 if __name__ == '__main__':
-    rostest.rosrun('ur3_ft_gripper_description', 'network_dashboard', NetworkDashboardTest)
+    rostest.rosrun('ur3_ft_gripper_description', 'network_faces', NetworkFacesTest)

@@ -60,7 +60,7 @@ NOT_RUN_HERE = [
     ('rostopic ', 'needs the running devices; test/rostest speaks the same interfaces'),
     ('rosservice ', 'needs the running devices; test/rostest speaks the same interfaces'),
     ("printf 'robotmode", 'needs the simulated controller running with an address: test/rostest/'
-                          'network_dashboard.test speaks the same protocol to it'),
+                          'network_faces.test speaks the same protocol to it'),
     ('rosrun robotiq_2f_gripper_control', "Robotiq's interactive tools, not built here (test/rostest/"
                                           "gripper_registers.test speaks their registers)"),
     ('rosrun ur3_ft_gripper_description pick_and_weigh.py', 'needs the cell on physics running: '

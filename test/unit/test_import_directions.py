@@ -30,6 +30,8 @@ def ros_in(names):
 @pytest.mark.parametrize('module', [
     PACKAGE + '.devices.ur_arm.core',
     PACKAGE + '.devices.network.dashboard',
+    PACKAGE + '.devices.network.rtde',
+    PACKAGE + '.devices.ur_arm.network_faces',
     PACKAGE + '.urscript',
 ])
 def test_the_controller_core_and_its_network_faces_run_without_ros(module):
@@ -37,10 +39,11 @@ def test_the_controller_core_and_its_network_faces_run_without_ros(module):
 
 
 def test_the_network_faces_know_nothing_of_the_arm_and_the_core_nothing_of_its_faces():
-    faces = loaded_by(PACKAGE + '.devices.network.dashboard')
+    faces = loaded_by(PACKAGE + '.devices.network.dashboard', PACKAGE + '.devices.network.rtde')
     assert [n for n in faces if n.startswith(PACKAGE + '.devices.ur_arm')] == []
     core = loaded_by(PACKAGE + '.devices.ur_arm.core')
-    assert [n for n in core if n.startswith(PACKAGE + '.devices.ur_arm.arm_sim')] == []
+    assert [n for n in core if n.startswith(PACKAGE + '.devices.ur_arm.arm_sim') or
+            n.startswith(PACKAGE + '.devices.network') or n.endswith('.network_faces')] == []
 
 
 def test_the_check_sees_an_import_of_ros():

@@ -177,5 +177,10 @@ class Recorder(object):
     def since(self, t):
         return [m for (_, m) in self.items_since(t)]
 
+    def latest(self):
+        """The last message received, or None."""
+        with self.lock:
+            return self.items[-1][1] if self.items else None
+
     def next_after(self, t, timeout=TIMEOUT):
         return wait_for(lambda: self.since(t), 'a message on %s' % self.topic, timeout, step=0.01)[0]

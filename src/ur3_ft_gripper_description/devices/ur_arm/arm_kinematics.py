@@ -98,6 +98,10 @@ class ArmKinematics(object):
             t = t.dot(kinematics.motion_matrix(joint, positions[index]))
         return t.dot(self.tail), axes, points
 
+    def joint_axes(self, positions):
+        """(axes, origins): each actuated joint's axis and origin in the base, controller order."""
+        return self._chain(positions)[1:]
+
     def jacobian(self, positions, tcp=None):
         """6xN geometric Jacobian of the tip in the base frame (revolute joints): linear, then angular.
 

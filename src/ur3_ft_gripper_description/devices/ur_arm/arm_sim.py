@@ -61,9 +61,9 @@ from ..physics import link
 from . import cartesian
 from . import core as arm_core
 from . import joints
-from ..network import dashboard as network_dashboard
 from ..network import listen
 from .dashboard import DashboardServices
+from .network_faces import NetworkFaces
 from .settings import PARAMETERS, read_settings
 from .trajectory import GoalError, JointTolerance, Point
 
@@ -173,16 +173,15 @@ class ArmSim(object):
         self.action_status = ActionStatus(servers + [self.set_mode.action_server])
 
         # -- the controller's own network interfaces, on the same core and lock as the ROS interface
-        self.network = []
+        self.network = None
         if settings.robot_ip:
-            self.network.append(network_dashboard.serve(
-                settings.robot_ip, lambda command: self._call(core.dashboard, command), rospy.logwarn))
+            self.network = NetworkFaces(settings.robot_ip, core, self._call, rospy.logwarn)
             if not listen.is_loopback(settings.robot_ip):
                 rospy.logwarn('%s: the controller\'s network interfaces listen on %s, beyond this machine'
                               % (NODE, settings.robot_ip))
-        for server in self.network:
-            threading.Thread(target=server.serve_forever, name=server.name, daemon=True).start()
-            rospy.loginfo('%s: %s on %s:%d' % (NODE, server.name, *server.server_address[:2]))
+            self.network.start()
+            for server in self.network.servers:
+                rospy.loginfo('%s: %s on %s:%d' % (NODE, server.name, *server.server_address[:2]))
 
     # -- calling the core --------------------------------------------------------------------
 
@@ -341,6 +340,8 @@ class ArmSim(object):
         """One control cycle of `dt` s; what it publishes is stamped `stamp` (default: ROS time now)."""
         with self.lock:
             snapshot = self.core.step(dt)
+            if self.network is not None:
+                self.network.after_cycle(dt, snapshot)
         self._report()
         self._publish(snapshot, stamp or self.rospy.Time.now())
         self.action_status.step(dt)
@@ -451,8 +452,8 @@ def main():
         except (sim_params.ParamError, MissingMuJoCo, WorldError, DescriptionError, listen.ListenError) as exc:
             rospy.logfatal('%s: %s' % (NODE, exc))
             return 1
-        for server in sim.network:
-            rospy.on_shutdown(server.shutdown)
+        if sim.network is not None:
+            rospy.on_shutdown(sim.network.shutdown)
         if sim.clock is not None:
             return node_loop.run_as_clock(rospy, sim.clock, sim.step)
         # The wall clock: each cycle as long as the time since the last, at most ten periods.

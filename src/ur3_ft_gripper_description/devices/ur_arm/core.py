@@ -190,6 +190,9 @@ class ArmCore(object):
         self.secondary_runs = []     # urscript.Run of the secondary programs running beside it
         self.held = np.array(motion.position, dtype=float)  # where the arm holds while nothing commands
         self.tcp = np.eye(4)         # the TCP in the flange's frame (set_tcp)
+        self.uptime = 0.0            # s of control cycles since the controller started
+        # What the last cycle commanded the joints (RTDE's target_q and target_qd).
+        self.target_position, self.target_velocity = np.array(motion.position, dtype=float), np.zeros(6)
         self.wrench_model = tcp_wrench.TcpWrench()
         # The controller_stopper acts on the first cycle too: a robot that starts without
         # its program running starts with the commanding controllers stopped.
@@ -629,12 +632,21 @@ class ArmCore(object):
             self.held = np.array(self.motion.position, dtype=float)
             command = self._hold()
         self.motion.step(command, dt)
+        self.uptime += dt
+        self._remember_target(command)
         reason = self.motion.protective_stop
         if reason is not None and self.robot.safety_mode != rs.PROTECTIVE_STOP:
             self.robot.protective_stop(reason)
             self._say(ERROR, 'Protective stop: %s. The program is paused: remove the cause, then '
                              'dashboard/unlock_protective_stop (after 5 s) and dashboard/play' % reason)
         return self._snapshot(limit_factor)
+
+    def _remember_target(self, command):
+        if command.position is not None:
+            self.target_position = np.array(command.position, dtype=float)
+        else:  # VELOCITY: where the speeds took the joints
+            self.target_position = np.array(self.motion.position, dtype=float)
+        self.target_velocity = np.zeros(6) if command.velocity is None else np.array(command.velocity, dtype=float)
 
     def _snapshot(self, limit_factor):
         robot = self.robot

@@ -1,0 +1,66 @@
+"""The simulated controller's own network interfaces over its core, started together; no ROS.
+
+Which face answers from which part of the core: the Dashboard Server from
+the robot's dashboard, RTDE from rtde_fields over each cycle's Snapshot.
+Every call into the core goes through `call(method, *args)`, which the host
+(the ROS node, or a test) makes hold the core's lock, so the faces and the
+ROS interface see one robot. The host calls `after_cycle` after each
+control cycle, holding that lock.
+"""
+
+import threading
+
+from ..network import dashboard, listen, rtde
+from . import rtde_fields
+from .script_robot import STEP_TIME
+from .software import CB3
+
+TABLE_GENERATION = {CB3: 'cb3'}  # rtde_variables.yaml's key of each generation (default: e_series)
+
+
+class NetworkFaces(object):
+    """The faces of `core` listening on `address` (listen.ListenError, one line, if one cannot)."""
+
+    def __init__(self, address, core, call, log, ports=None):
+        ports = dict({'dashboard': dashboard.PORT, 'rtde': rtde.PORT}, **(ports or {}))
+        software = core.software
+        self.core = core
+        self.readers = {}
+        fields = rtde.read_table(TABLE_GENERATION.get(software.generation, 'e_series'), software.version)
+        self.rtde = rtde.Exchange(fields, software.version, 1.0 / STEP_TIME[software.generation],
+                                  lambda values: call(rtde_fields.apply_inputs, core, values), log)
+        self.servers = []
+        try:
+            self.servers.append(dashboard.serve(address, lambda command: call(core.dashboard, command), log,
+                                                ports['dashboard']))
+            self.servers.append(rtde.serve(address, self.rtde, log, ports['rtde']))
+        except listen.ListenError:
+            for server in self.servers:
+                server.server_close()
+            raise
+        self.started = False
+
+    def start(self):
+        for server in self.servers:
+            threading.Thread(target=server.serve_forever, name=server.name, daemon=True).start()
+        self.started = True
+
+    def shutdown(self):
+        for server in self.servers:
+            if self.started:
+                server.shutdown()
+            server.server_close()
+
+    def after_cycle(self, dt, snapshot):
+        """The cycle's data to the faces that stream it (the caller holds the core's lock)."""
+        self.rtde.cycle(lambda names: [self._reader(name)(self.core, snapshot) for name in names])
+
+    def _reader(self, name):
+        reader = self.readers.get(name)
+        if reader is None:
+            reader = rtde_fields.reader(name)
+            if reader is None:  # a field of the guide the twin has no value for (a test keeps this empty)
+                zero = rtde.zero(self.rtde.fields['outputs'][name])
+                reader = lambda core, snapshot: zero  # noqa: E731
+            self.readers[name] = reader
+        return reader
