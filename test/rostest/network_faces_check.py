@@ -21,6 +21,7 @@ from ur3_ft_gripper_testing.rtde_client import RtdeClient
 
 PORT = 29999
 RTDE_PORT = 30004
+REALTIME_PORT = 30003
 NODE = '/ur_hardware_interface'
 TARGET = [0.3, -1.4, 1.3, -1.5, -1.5, 0.4]
 
@@ -145,6 +146,18 @@ class NetworkFacesTest(unittest.TestCase):
         client = self.rtde()
         self.assertEqual(client.controller_version()[0], 5)
         client.close()
+
+    def test_7_a_program_sent_on_the_real_time_interface_moves_what_ros_reports(self):
+        self.client.ask('power on')
+        self.client.ask('brake release')
+        wait_for(lambda: self.mode_on_ros() == RobotMode.RUNNING, 'RUNNING')
+        realtime = socket.create_connection((self.address, REALTIME_PORT), timeout=TIMEOUT)
+        home = [0.0, -1.2, 1.0, -1.4, -1.5, 0.2]
+        realtime.sendall(('def from_network():\n  movej([%s], a=3, v=2)\nend\n'
+                          % ', '.join(repr(v) for v in home)).encode())
+        wait_for(lambda: max(abs(a - b) for a, b in zip(self.joint_states.latest().position, home)) < 1e-6,
+                 'joint_states at the target of the program sent on 30003')
+        realtime.close()
 
 
 if __name__ == '__main__':

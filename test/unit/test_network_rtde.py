@@ -7,51 +7,18 @@ each cycle, so what a client reads is checked against what the robot did:
 where a program moved the joints, what it wrote to a register.
 """
 import socket
-import threading
 
 import numpy as np
 import pytest
 
-from ur3_ft_gripper_description.devices.network import listen, rtde
+from ur3_ft_gripper_description.devices.network import rtde
 from ur3_ft_gripper_description.devices.ur_arm import rtde_fields
-from ur3_ft_gripper_description.devices.ur_arm.network_faces import NetworkFaces, TABLE_GENERATION
+from ur3_ft_gripper_description.devices.ur_arm.network_faces import TABLE_GENERATION
 from ur3_ft_gripper_description.number_text import number_list
 from ur3_ft_gripper_testing.rtde_client import RtdeClient
-from test_ur_arm_core import make_core
+from controller_cell import Cell, rtde_max_frequency
 
 TARGET = [0.3, -1.4, 1.3, -1.5, -1.5, 0.4]
-
-
-class Cell(object):
-    """A core and its network faces on free loopback ports, stepped as the arm's node steps them."""
-
-    def __init__(self, configured_model, ur_type):
-        self.core, self.lock, self.logged = make_core(configured_model, ur_type), threading.RLock(), []
-        self.dt = 1.0 / rtde_max_frequency(self.core)
-
-        def call(method, *args):
-            with self.lock:
-                return method(*args)
-
-        self.faces = NetworkFaces(listen.LOOPBACK, self.core, call, self.logged.append,
-                                  ports={'dashboard': 0, 'rtde': 0})
-        self.faces.start()
-        self.port = self.faces.servers[1].server_address[1]
-
-    def step(self, cycles=1):
-        for _ in range(cycles):
-            with self.lock:
-                snapshot = self.core.step(self.dt)
-                self.faces.after_cycle(self.dt, snapshot)
-
-    def client(self, protocol=2):
-        client = RtdeClient(self.port)
-        assert client.negotiate(protocol)
-        return client
-
-
-def rtde_max_frequency(core):
-    return 125.0 if core.software.generation == 'CB3' else 500.0
 
 
 @pytest.fixture(params=['ur5e', 'ur3'])

@@ -4,13 +4,16 @@ A face listens on loopback unless the user names another address: the
 robot's own port numbers on 127.0.0.1 by default, and other cells on the
 same machine on other loopback addresses (127.0.0.2, ...), which Linux
 serves without any set-up, as a second robot on the network has its own IP
-address. Nothing here starts a thread.
+address.
 """
 
 import errno
 import ipaddress
+import queue
+import socket
 import socketserver
 import sys
+import threading
 
 LOOPBACK = '127.0.0.1'
 
@@ -51,6 +54,44 @@ class ThreadingServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
             return  # the client went away mid-reply, as clients do
         self.log('%s: the session of %s:%d failed: %s: %s; its connection is closed'
                  % (self.name, client_address[0], client_address[1], type(error).__name__, error))
+
+
+class Outbox(object):
+    """What a face sends one client, written by a thread of its own, so that the control cycle never waits
+    for a client. A client `size` packages behind loses its connection, with `overflow_line` logged once:
+    as UR's controller closes the connection of a client that does not read."""
+
+    def __init__(self, sock, size, overflow_line, log):
+        self.socket, self.overflow_line, self.log = sock, overflow_line, log
+        self.queue = queue.Queue(size)
+        self.overflowed = False
+        threading.Thread(target=self._write, daemon=True).start()
+
+    def put(self, data):
+        try:
+            self.queue.put_nowait(data)
+        except queue.Full:
+            if not self.overflowed:
+                self.overflowed = True
+                self.log(self.overflow_line)
+                self.socket.shutdown(socket.SHUT_RDWR)
+
+    def close(self):
+        """The writer ends after what is queued (the session's end)."""
+        try:
+            self.queue.put_nowait(None)
+        except queue.Full:
+            pass  # overflowed: the socket is shut down, the writer ends on its error
+
+    def _write(self):
+        while True:
+            data = self.queue.get()
+            if data is None:
+                return
+            try:
+                self.socket.sendall(data)
+            except OSError:
+                return
 
 
 def serve(name, address, port, handler, log):

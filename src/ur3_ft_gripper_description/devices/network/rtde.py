@@ -22,8 +22,6 @@ gets one log line naming the client, and only that connection closes.
 """
 
 import os
-import queue
-import socket
 import socketserver
 import struct
 import threading
@@ -190,7 +188,6 @@ class Session(object):
         self.inputs = {}             # recipe id -> Recipe
         self.every, self.cycles = 1, 0  # a data package every `every` cycles; cycles since the last
         self.started = False
-        self.fell_behind = False  # the client fell behind and its connection was closed
 
     def send(self, data, data_package=False):
         self._send(data, data_package)
@@ -293,27 +290,16 @@ def serve(address, exchange, log, port=PORT):
     class Connection(socketserver.StreamRequestHandler):
         def handle(self):
             client = '%s:%d' % self.client_address[:2]
-            outgoing = queue.Queue(SEND_QUEUE)
-
-            def send(data, data_package):
-                try:
-                    outgoing.put_nowait(data)
-                except queue.Full:
-                    if not session.fell_behind:
-                        log('rtde: %s reads slower than the frequency it asked for: its connection is closed'
-                            % client)
-                        session.started, session.fell_behind = False, True
-                        self.request.shutdown(socket.SHUT_RDWR)
-            session = exchange.session(send, client)
-            writer = threading.Thread(target=self._write, args=(outgoing,), daemon=True)
-            writer.start()
+            outbox = listen.Outbox(self.request, SEND_QUEUE, 'rtde: %s reads slower than the frequency it asked for: '
+                                   'its connection is closed' % client, log)
+            session = exchange.session(lambda data, data_package: outbox.put(data), client)
             try:
-                self._read(session, client, log)
+                self._read(session, client)
             finally:
                 exchange.close(session)
-                outgoing.put(None)
+                outbox.close()
 
-        def _read(self, session, client, log):
+        def _read(self, session, client):
             while True:
                 header = self.rfile.read(HEADER.size)
                 if len(header) < HEADER.size:
@@ -326,16 +312,6 @@ def serve(address, exchange, log, port=PORT):
                     session.receive(kind, payload)
                 except ProtocolError as error:
                     log('rtde: %s sent %s: its connection is closed' % (client, error))
-                    return
-
-        def _write(self, outgoing):
-            while True:
-                data = outgoing.get()
-                if data is None:
-                    return
-                try:
-                    self.wfile.write(data)
-                except OSError:
                     return
 
     return listen.serve('RTDE', address, port, Connection, log)

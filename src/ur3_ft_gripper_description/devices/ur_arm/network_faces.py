@@ -1,7 +1,9 @@
 """The simulated controller's own network interfaces over its core, started together; no ROS.
 
 Which face answers from which part of the core: the Dashboard Server from
-the robot's dashboard, RTDE from rtde_fields over each cycle's Snapshot.
+the robot's dashboard; RTDE and the real-time interface from rtde_fields
+over each cycle's Snapshot (the real-time package is RTDE's fields in UR's
+order); programs sent as text run as script_command's do.
 Every call into the core goes through `call(method, *args)`, which the host
 (the ROS node, or a test) makes hold the core's lock, so the faces and the
 ROS interface see one robot. The host calls `after_cycle` after each
@@ -10,11 +12,13 @@ control cycle, holding that lock.
 
 import threading
 
-from ..network import dashboard, listen, rtde
+from ..network import dashboard, listen, realtime, rtde
 from . import rtde_fields
 from .script_robot import STEP_TIME
 from .software import CB3
 
+# The robot's port of each face, in the order they are served.
+PORTS = {'dashboard': dashboard.PORT, 'rtde': rtde.PORT, 'realtime': realtime.PORT}
 TABLE_GENERATION = {CB3: 'cb3'}  # rtde_variables.yaml's key of each generation (default: e_series)
 
 
@@ -22,23 +26,31 @@ class NetworkFaces(object):
     """The faces of `core` listening on `address` (listen.ListenError, one line, if one cannot)."""
 
     def __init__(self, address, core, call, log, ports=None):
-        ports = dict({'dashboard': dashboard.PORT, 'rtde': rtde.PORT}, **(ports or {}))
+        ports = dict(PORTS, **(ports or {}))
         software = core.software
+        generation = TABLE_GENERATION.get(software.generation, 'e_series')
         self.core = core
         self.readers = {}
-        fields = rtde.read_table(TABLE_GENERATION.get(software.generation, 'e_series'), software.version)
-        self.rtde = rtde.Exchange(fields, software.version, 1.0 / STEP_TIME[software.generation],
+        self.rtde = rtde.Exchange(rtde.read_table(generation, software.version), software.version,
+                                  1.0 / STEP_TIME[software.generation],
                                   lambda values: call(rtde_fields.apply_inputs, core, values), log)
+        self.realtime = realtime.Realtime(realtime.Layout(generation, software.version))
+        run = lambda text: call(core.script_command, text)  # noqa: E731
         self.servers = []
         try:
             self.servers.append(dashboard.serve(address, lambda command: call(core.dashboard, command), log,
                                                 ports['dashboard']))
             self.servers.append(rtde.serve(address, self.rtde, log, ports['rtde']))
+            self.servers.append(realtime.serve(address, self.realtime, run, log, ports['realtime']))
         except listen.ListenError:
             for server in self.servers:
                 server.server_close()
             raise
         self.started = False
+
+    def port(self, name):
+        """The port the server of `name` ('dashboard', 'rtde', 'realtime') listens on."""
+        return self.servers[list(PORTS).index(name)].server_address[1]
 
     def start(self):
         for server in self.servers:
@@ -53,7 +65,9 @@ class NetworkFaces(object):
 
     def after_cycle(self, dt, snapshot):
         """The cycle's data to the faces that stream it (the caller holds the core's lock)."""
-        self.rtde.cycle(lambda names: [self._reader(name)(self.core, snapshot) for name in names])
+        read = lambda names: [self._reader(name)(self.core, snapshot) for name in names]  # noqa: E731
+        self.rtde.cycle(read)
+        self.realtime.cycle(read)
 
     def _reader(self, name):
         reader = self.readers.get(name)

@@ -1,0 +1,97 @@
+"""The real-time client interface (TCP 30003): UR's state package at the control rate, and URScript in.
+
+As UR's client interface document describes it: every control cycle (125 Hz
+on a CB3, 500 Hz on an e-Series) each connected client gets one package, an
+int32 size (counting itself) and then big-endian doubles, the fields of
+config/ur_realtime_interface.yaml for the controller's software version.
+Each field is the RTDE field of the same quantity (its `rtde` name), so both
+faces read one robot; the slots UR reserves carry their fixed value. The
+client may send URScript (script_text.py), as ur_rtde sends its control
+program here.
+
+The face knows nothing of the robot: `Realtime.cycle(read)` is called
+after every control cycle with `read(rtde names) -> values` of that cycle,
+and each program goes to `run(text)`.
+"""
+
+import os
+import socketserver
+import struct
+import threading
+
+import yaml
+
+from . import listen
+from .rtde import _available
+from .script_text import read_programs
+
+PORT = 30003
+# A client that does not read: a second of packages at the fastest rate waits, then its connection ends.
+SEND_QUEUE = 500
+
+
+def default_layout_file():
+    return os.path.join(os.path.dirname(__file__), '..', '..', '..', '..', 'config', 'ur_realtime_interface.yaml')
+
+
+class Layout(object):
+    """The package of one software version: `names` (RTDE fields read each cycle) and how to pack them."""
+
+    def __init__(self, generation, version, path=None):
+        with open(path or default_layout_file()) as stream:
+            fields = [f for f in yaml.safe_load(stream)['fields'] if _available(f, generation, version)]
+        self.names = [f['rtde'] for f in fields if f['rtde'] is not None]
+        # Where each value goes: ('read', index in names, count) or ('fixed', value, count).
+        self.parts = [('read', self.names.index(f['rtde']), f['count']) if f['rtde'] is not None
+                      else ('fixed', float(f['value']), f['count']) for f in fields]
+        doubles = sum(f['count'] for f in fields)
+        self.size = 4 + 8 * doubles
+        self.struct = struct.Struct('>i%dd' % doubles)
+
+    def pack(self, values):
+        flat = [self.size]
+        for kind, what, count in self.parts:
+            if kind == 'fixed':
+                flat.extend([what] * count)
+            else:
+                value = values[what]
+                flat.extend(float(v) for v in value) if count > 1 else flat.append(float(value))
+        return self.struct.pack(*flat)
+
+
+class Realtime(object):
+    """The connected clients of the real-time interface and what each cycle sends them."""
+
+    def __init__(self, layout):
+        self.layout = layout
+        self.lock = threading.Lock()
+        self.clients = []  # each a send(bytes) callable
+
+    def cycle(self, read):
+        with self.lock:
+            clients = list(self.clients)
+        if clients:
+            data = self.layout.pack(read(self.layout.names))
+            for send in clients:
+                send(data)
+
+
+def serve(address, realtime, run, log, port=PORT):
+    """A listening real-time interface at (address, port); `run(text)` runs a program the client sent.
+    The caller runs serve_forever() in a thread and shutdown() at the end (listen.ThreadingServer)."""
+
+    class Connection(socketserver.BaseRequestHandler):
+        def handle(self):
+            client = '%s:%d' % self.client_address[:2]
+            outbox = listen.Outbox(self.request, SEND_QUEUE, 'real-time interface: %s does not read its packages: '
+                                   'its connection is closed' % client, log)
+            with realtime.lock:
+                realtime.clients.append(outbox.put)
+            try:
+                read_programs(self.request, client, 'real-time interface', run, log)
+            finally:
+                with realtime.lock:
+                    realtime.clients.remove(outbox.put)
+                outbox.close()
+
+    return listen.serve('real-time interface', address, port, Connection, log)

@@ -1,0 +1,41 @@
+"""The simulated controller's core with its network faces on free loopback ports, without ROS, for the
+tests of the faces: stepped as the arm's node steps it, each face seeing every cycle."""
+import threading
+
+from ur3_ft_gripper_description.devices.network import listen
+from ur3_ft_gripper_description.devices.ur_arm.network_faces import PORTS, NetworkFaces
+from ur3_ft_gripper_testing.rtde_client import RtdeClient
+from test_ur_arm_core import make_core
+
+
+class Cell(object):
+    """A core and its network faces on free loopback ports, stepped as the arm's node steps them."""
+
+    def __init__(self, configured_model, ur_type):
+        self.core, self.lock, self.logged = make_core(configured_model, ur_type), threading.RLock(), []
+        self.dt = 1.0 / rtde_max_frequency(self.core)
+
+        def call(method, *args):
+            with self.lock:
+                return method(*args)
+
+        self.faces = NetworkFaces(listen.LOOPBACK, self.core, call, self.logged.append,
+                                  ports={name: 0 for name in PORTS})
+        self.faces.start()
+        self.port = self.faces.port('rtde')
+
+    def step(self, cycles=1):
+        for _ in range(cycles):
+            with self.lock:
+                snapshot = self.core.step(self.dt)
+                self.faces.after_cycle(self.dt, snapshot)
+
+    def client(self, protocol=2):
+        client = RtdeClient(self.port)
+        assert client.negotiate(protocol)
+        return client
+
+
+def rtde_max_frequency(core):
+    return 125.0 if core.software.generation == 'CB3' else 500.0
+
