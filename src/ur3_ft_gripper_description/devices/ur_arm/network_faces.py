@@ -12,13 +12,14 @@ control cycle, holding that lock.
 
 import threading
 
-from ..network import dashboard, listen, realtime, rtde
+from ..network import dashboard, listen, primary, realtime, rtde
 from . import rtde_fields
 from .script_robot import STEP_TIME
 from .software import CB3
 
 # The robot's port of each face, in the order they are served.
-PORTS = {'dashboard': dashboard.PORT, 'rtde': rtde.PORT, 'realtime': realtime.PORT}
+PORTS = {'dashboard': dashboard.PORT, 'primary': primary.PORTS['primary'], 'secondary': primary.PORTS['secondary'],
+         'realtime': realtime.PORT, 'rtde': rtde.PORT}
 TABLE_GENERATION = {CB3: 'cb3'}  # rtde_variables.yaml's key of each generation (default: e_series)
 
 
@@ -35,13 +36,16 @@ class NetworkFaces(object):
                                   1.0 / STEP_TIME[software.generation],
                                   lambda values: call(rtde_fields.apply_inputs, core, values), log)
         self.realtime = realtime.Realtime(realtime.Layout(generation, software.version))
+        self.primary = primary.Primary(primary.StateLayout(generation, software.version), software.version)
         run = lambda text: call(core.script_command, text)  # noqa: E731
+        answer = lambda command: call(core.dashboard, command)  # noqa: E731
         self.servers = []
         try:
-            self.servers.append(dashboard.serve(address, lambda command: call(core.dashboard, command), log,
-                                                ports['dashboard']))
-            self.servers.append(rtde.serve(address, self.rtde, log, ports['rtde']))
+            self.servers.append(dashboard.serve(address, answer, log, ports['dashboard']))
+            for name in ('primary', 'secondary'):
+                self.servers.append(primary.serve(name, address, self.primary, run, answer, log, ports[name]))
             self.servers.append(realtime.serve(address, self.realtime, run, log, ports['realtime']))
+            self.servers.append(rtde.serve(address, self.rtde, log, ports['rtde']))
         except listen.ListenError:
             for server in self.servers:
                 server.server_close()
@@ -49,7 +53,7 @@ class NetworkFaces(object):
         self.started = False
 
     def port(self, name):
-        """The port the server of `name` ('dashboard', 'rtde', 'realtime') listens on."""
+        """The port the server of `name` (a key of PORTS) listens on."""
         return self.servers[list(PORTS).index(name)].server_address[1]
 
     def start(self):
@@ -68,6 +72,7 @@ class NetworkFaces(object):
         read = lambda names: [self._reader(name)(self.core, snapshot) for name in names]  # noqa: E731
         self.rtde.cycle(read)
         self.realtime.cycle(read)
+        self.primary.cycle(dt, read)
 
     def _reader(self, name):
         reader = self.readers.get(name)

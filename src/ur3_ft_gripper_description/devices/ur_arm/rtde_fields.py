@@ -162,10 +162,46 @@ COMPUTED = {
 }
 
 
+# Quantities of the controller beyond RTDE's fields, which its other interfaces report (the primary
+# interface's robot state: config/ur_primary_interface.yaml's sources).
+# ur_client_library's robot types (datatypes.h): an e-Series model has its CB3 namesake's number.
+ROBOT_TYPE = {'ur5': 1, 'ur10': 2, 'ur3': 3, 'ur16': 4, 'ur20': 7, 'ur30': 8}
+# UR's joint acceleration limit as URSim 5.8 reports it for every joint (rad/s^2).
+JOINT_ACCELERATION_LIMIT = 40.0
+
+
+def _interleaved(first, second):
+    return [float(v) for pair in zip(first, second) for v in pair]
+
+
+CONTROLLER = {
+    'clock_ms': lambda c, s: int(round(c.uptime * 1000.0)),
+    'power_on': lambda c, s: s.robot_mode != rs.POWER_OFF,
+    'protective_stopped': lambda c, s: s.safety_mode == rs.PROTECTIVE_STOP,
+    'program_running': lambda c, s: c.robot.program_state == rs.PLAYING,
+    'program_paused': lambda c, s: c.robot.program_state == rs.PAUSED,
+    'control_mode': lambda c, s: 2 if c.script_robot.force is not None else 0,  # POSITION 0, FORCE 2
+    'dh_theta': lambda c, s: [0.0] * 6,
+    'dh_a': lambda c, s: [float(v) for v in c.arm.nominal.a],
+    'dh_d': lambda c, s: [float(v) for v in c.arm.nominal.d],
+    'dh_alpha': lambda c, s: list(c.arm.nominal.ALPHA),
+    'joint_position_limits': lambda c, s: _interleaved(c.arm.lower, c.arm.upper),
+    'joint_speed_acceleration_limits': lambda c, s: _interleaved(c.arm.velocity, [JOINT_ACCELERATION_LIMIT] * 6),
+    'robot_type': lambda c, s: ROBOT_TYPE[c.software.ur_type.rstrip('e')],
+    # URSim 5.8's UR5e (ur_client_library's capture); the CB3's are not documented.
+    'masterboard_version': lambda c, s: 6,
+    'controller_box_type': lambda c, s: 4,
+    'robot_sub_type': lambda c, s: 3,
+}
+
+
 def reader(name):
-    """function(core, snapshot) -> the value of output field `name`, or None if the twin has none."""
+    """function(core, snapshot) -> the value of output field `name` (or controller quantity), or None if
+    the twin has none."""
     if name in COMPUTED:
         return COMPUTED[name]
+    if name in CONTROLLER:
+        return CONTROLLER[name]
     if name in UNMODELLED:
         value = UNMODELLED[name][0]
         return lambda c, s: value

@@ -1,0 +1,173 @@
+"""The primary and secondary client interfaces (TCP 30001, 30002): UR's robot state at 10 Hz, URScript in.
+
+As UR's client interface document describes them. A client is first sent
+the version message (a robot message of type VERSION: "URControl", the
+software version, a build date), then a robot state package every 0.1 s of
+the controller's time: the sub-packages of config/ur_primary_interface.yaml
+for the generation and software version, in the order the controller sends
+them, each value from its `source` (an RTDE field, a quantity of the
+controller, or a constant). Both ports send the same; both take URScript
+(script_text.py), and the primary interface also takes the few controller
+commands ur_client_library sends as text (PRIMARY_COMMANDS).
+
+The face knows nothing of the robot: `Primary.cycle(dt, read)` is called
+after every control cycle with `read(names) -> values` of that cycle;
+programs go to `run(text)` and the controller commands to `dashboard(command)`.
+"""
+
+import math
+import os
+import socketserver
+import struct
+import threading
+
+import yaml
+
+from . import listen
+from .rtde import _available
+from .script_text import read_programs
+
+PORTS = {'primary': 30001, 'secondary': 30002}
+ROBOT_STATE, ROBOT_MESSAGE, VERSION = 16, 20, 3
+SOURCE_CONTROLLER = -2  # the robot message source of the version message
+PROJECT_NAME, BUILD_DATE = b'URControl', b'simulated'
+STATE_PERIOD = 0.1  # s of the controller's time: 10 Hz
+TYPES = {'int8': 'b', 'uint8': 'B', 'bool': '?', 'int16': 'h', 'int32': 'i', 'uint32': 'I', 'uint64': 'Q',
+         'float': 'f', 'double': 'd'}
+# Text the primary interface takes beside URScript, as ur_client_library sends it: the Dashboard Server's
+# command of the same effect.
+PRIMARY_COMMANDS = {'power on': 'power on', 'power off': 'power off', 'set robotmode run': 'brake release',
+                    'set unlock protective stop': 'unlock protective stop', 'stop program': 'stop'}
+# A client that does not read: 10 s of states wait, then its connection ends.
+SEND_QUEUE = 100
+
+
+def default_table_file():
+    return os.path.join(os.path.dirname(__file__), '..', '..', '..', '..', 'config', 'ur_primary_interface.yaml')
+
+
+def _source(source, element):
+    """('read', name, element index or None) or ('const', value) of a field's `source`."""
+    if not isinstance(source, str):
+        return 'const', source
+    if source.endswith(']'):
+        name, index = source[:-1].split('[')
+        return 'read', name, int(index)
+    return 'read', source, element
+
+
+class StateLayout(object):
+    """The robot state package of one generation and software version: `names` read, and their packing."""
+
+    def __init__(self, generation, version, path=None):
+        with open(path or default_table_file()) as stream:
+            table = yaml.safe_load(stream)
+        self.names, self.packages = [], []
+        for name in table['robot_state_order'][generation]:
+            package = table['robot_state_sub_packages'][name]
+            repeat = package.get('repeat', 1)
+            fields = [f for f in package.get('per_joint') or package['fields']
+                      if _available(f, generation, version) and 'only_if' not in f]
+            fmt, items = '>iB', []
+            for joint in range(repeat):
+                for field in fields:
+                    kind = field['type']
+                    if kind.startswith('char['):  # bytes UR keeps for itself: zeros
+                        fmt += kind[5:-1] + 's'
+                        items.append(('const', b'', None))
+                        continue
+                    count = field.get('count', 1)
+                    for element in range(count):
+                        fmt += TYPES[kind]
+                        item = _source(field['source'], joint if repeat > 1 else element if count > 1 else None)
+                        if item[0] == 'read' and item[1] not in self.names:
+                            self.names.append(item[1])
+                        items.append(item + (kind,))
+            self.packages.append((package['id'], struct.Struct(fmt), items))
+
+    def pack(self, values):
+        read = dict(zip(self.names, values))
+        data = []
+        for package_id, layout, items in self.packages:
+            flat = [layout.size, package_id]
+            for item in items:
+                if item[0] == 'const':
+                    value = item[1]
+                else:
+                    value = read[item[1]]
+                    value = value if item[2] is None else value[item[2]]
+                flat.append(_cast(value, item[-1]))
+            data.append(layout.pack(*flat))
+        body = b''.join(data)
+        return struct.pack('>iB', 5 + len(body), ROBOT_STATE) + body
+
+
+def _cast(value, kind):
+    if kind in ('float', 'double'):
+        return float(value)
+    if kind == 'bool':
+        return bool(value)
+    if kind is None:
+        return value
+    return int(value)
+
+
+def version_message(version, timestamp=0):
+    """The robot message of type VERSION for software `version` (major, minor, bugfix, build)."""
+    body = struct.pack('>QbBb', timestamp, SOURCE_CONTROLLER, VERSION, len(PROJECT_NAME)) + PROJECT_NAME + \
+        struct.pack('>BBii', *version[:4]) + BUILD_DATE
+    return struct.pack('>iB', 5 + len(body), ROBOT_MESSAGE) + body
+
+
+class Primary(object):
+    """The clients of both interfaces and the robot state each 0.1 s of the controller's time sends them."""
+
+    def __init__(self, layout, version):
+        self.layout, self.version = layout, tuple(version)
+        self.lock = threading.Lock()
+        self.clients = []  # each a send(bytes) callable
+        self.time = 0.0  # s of the controller's time
+
+    def cycle(self, dt, read):
+        """After a control cycle of `dt` s: a state on the cycle that reaches each tenth of a second."""
+        before, self.time = self.time, self.time + dt
+        if math.floor(self.time / STATE_PERIOD + 1e-9) == math.floor(before / STATE_PERIOD + 1e-9):
+            return
+        with self.lock:
+            clients = list(self.clients)
+        if clients:
+            data = self.layout.pack(read(self.layout.names))
+            for send in clients:
+                send(data)
+
+
+def serve(name, address, primary, run, dashboard, log, port=None):
+    """A listening primary ('primary') or secondary ('secondary') interface at (address, port) over
+    `primary`; `run(text)` runs a program, `dashboard(command)` a controller command (primary only).
+    The caller runs serve_forever() in a thread and shutdown() at the end (listen.ThreadingServer)."""
+    face = '%s interface' % name
+    commands = PRIMARY_COMMANDS if name == 'primary' else {}
+
+    def take(text):
+        command = commands.get(text.strip())
+        if command is not None:
+            dashboard(command)
+        else:
+            run(text)
+
+    class Connection(socketserver.BaseRequestHandler):
+        def handle(self):
+            client = '%s:%d' % self.client_address[:2]
+            outbox = listen.Outbox(self.request, SEND_QUEUE, '%s: %s does not read its packages: its connection '
+                                   'is closed' % (face, client), log)
+            outbox.put(version_message(primary.version))
+            with primary.lock:
+                primary.clients.append(outbox.put)
+            try:
+                read_programs(self.request, client, face, take, log)
+            finally:
+                with primary.lock:
+                    primary.clients.remove(outbox.put)
+                outbox.close()
+
+    return listen.serve(face, address, PORTS[name] if port is None else port, Connection, log)
