@@ -13,6 +13,7 @@ import math
 import os
 import socket
 import struct
+import time
 
 import pytest
 import rospkg
@@ -126,6 +127,15 @@ def description_hash(ur_type):
         return yaml.safe_load(stream)['kinematics']['hash']
 
 
+def taken_in(cell, condition, seconds=30.0):
+    """Step the cell until condition() holds: the faces' threads take text in while it steps, and the
+    wall clock bounds only that."""
+    deadline = time.monotonic() + seconds
+    while not condition():
+        assert time.monotonic() < deadline, 'not taken in within %g s' % seconds
+        cell.step()
+
+
 @pytest.fixture(params=['ur5e', 'ur3'])
 def cell(request, configured_model):
     cell = Cell(configured_model, request.param)
@@ -175,14 +185,12 @@ def test_the_primary_interface_takes_its_commands_and_the_secondary_a_program(ce
     primary, secondary = PrimaryClient(cell.faces.port('primary')), PrimaryClient(cell.faces.port('secondary'))
     primary.package()
     secondary.package()
-    primary.send('power off\n')
+    # A program first: the robot runs programs only while RUNNING.
     secondary.send('sec outputs():\n  set_standard_digital_out(4, True)\nend\n')
-    subs = None
-    for _ in range(20):
-        subs, _ = secondary.newest_state(cell)
-        outputs, = struct.unpack_from('>i', subs[MASTERBOARD_DATA], 4)
-        if robot_mode(subs) == (False, POWER_OFF) and outputs & 1 << 4:
-            break
+    taken_in(cell, lambda: cell.core.robot.digital_out[4])
+    primary.send('power off\n')
+    taken_in(cell, lambda: cell.core.robot.robot_mode == 'POWER_OFF')
+    subs, _ = secondary.newest_state(cell)
     assert robot_mode(subs) == (False, POWER_OFF)
     assert struct.unpack_from('>i', subs[MASTERBOARD_DATA], 4)[0] == 1 << 4
     primary.close()

@@ -9,6 +9,7 @@ the robot mode at 756, the digital outputs at 1044, the program state at
 import select
 import socket
 import struct
+import time
 
 import pytest
 
@@ -24,6 +25,7 @@ PACKAGE_BYTES = {('cb3', (3, 5, 0)): 1108, ('cb3', (3, 14, 3)): 1220, ('e_series
 OFFSET = {'time': 4, 'q_actual': 252, 'tool_vector_actual': 444, 'robot_mode': 756, 'digital_outputs': 1044,
           'program_state': 1052}
 RUNNING, PROGRAM_PLAYING, PROGRAM_STOPPED = 7, 2, 1
+TAKE_IN = 30.0  # wall s for a face's thread to take a connection or its text in
 
 
 class RealtimeClient(object):
@@ -39,12 +41,12 @@ class RealtimeClient(object):
 
     def taken_in(self, cell):
         """Step the cell until the face sends this client its first package (the server's thread takes the
-        connection in); the newest package."""
-        for _ in range(500):
+        connection in: the wall clock bounds that wait); that package."""
+        deadline = time.monotonic() + TAKE_IN
+        while not select.select([self.socket], [], [], 0.001)[0]:
+            assert time.monotonic() < deadline, 'no package within %g s' % TAKE_IN
             cell.step()
-            if select.select([self.socket], [], [], 0.01)[0]:
-                return self.package()
-        raise AssertionError('no package within 500 cycles')
+        return self.package()
 
     def send(self, text):
         self.socket.sendall(text.encode())
@@ -54,13 +56,17 @@ class RealtimeClient(object):
         self.socket.close()
 
 
-def step_until(cell, condition, what, cycles=5000):
-    """Step the cell until condition() holds after a cycle, at most `cycles` cycles."""
-    for _ in range(cycles):
+def step_until(cell, condition, what, seconds=None):
+    """Step the cell until condition() holds after a cycle: within `seconds` of the controller's time, or
+    (None) within TAKE_IN s of the wall clock, for what a face's thread takes in."""
+    cycles, deadline = 0, time.monotonic() + TAKE_IN
+    while not condition():
+        if seconds is None:
+            assert time.monotonic() < deadline, '%s did not happen within %g s' % (what, TAKE_IN)
+        else:
+            assert cycles * cell.dt < seconds, '%s did not happen within %g s' % (what, seconds)
         cell.step()
-        if condition():
-            return
-    raise AssertionError('%s did not happen within %d cycles' % (what, cycles))
+        cycles += 1
 
 
 def doubles(data, name, count=1):
@@ -96,7 +102,7 @@ def test_a_program_sent_as_text_moves_the_arm_the_package_reads(cell):
     client.send('def p():\n  movej([%s], a=3, v=2)\n' % number_list(TARGET))
     client.send('end\n')  # a program may come in pieces
     step_until(cell, lambda: cell.core.script_running, 'the program to start')
-    step_until(cell, lambda: not cell.core.script_running, 'the program to end')
+    step_until(cell, lambda: not cell.core.script_running, 'the program to end', seconds=10.0)
     data = None
     while True:  # the newest package
         data = client.package()
