@@ -94,6 +94,32 @@ class Outbox(object):
                 return
 
 
+class Broadcast(object):
+    """The connected clients of a face that sends all of them the same package (each a send(bytes))."""
+
+    def __init__(self, layout):
+        self.layout = layout  # .names read each time, .pack(values) -> bytes
+        self.lock = threading.Lock()
+        self.clients = []
+
+    def add(self, send):
+        with self.lock:
+            self.clients.append(send)
+
+    def remove(self, send):
+        with self.lock:
+            self.clients.remove(send)
+
+    def send(self, read):
+        """One package of `read(layout.names)` to every client; nothing is read without a client."""
+        with self.lock:
+            clients = list(self.clients)
+        if clients:
+            data = self.layout.pack(read(self.layout.names))
+            for send in clients:
+                send(data)
+
+
 def serve(name, address, port, handler, log):
     """A ThreadingServer of `handler` at (address, port), bound and listening; ListenError naming `name`."""
     try:

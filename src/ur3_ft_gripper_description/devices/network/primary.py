@@ -19,7 +19,6 @@ import math
 import os
 import socketserver
 import struct
-import threading
 
 import yaml
 
@@ -119,13 +118,12 @@ def version_message(version, timestamp=0):
     return struct.pack('>iB', 5 + len(body), ROBOT_MESSAGE) + body
 
 
-class Primary(object):
+class Primary(listen.Broadcast):
     """The clients of both interfaces and the robot state each 0.1 s of the controller's time sends them."""
 
     def __init__(self, layout, version):
-        self.layout, self.version = layout, tuple(version)
-        self.lock = threading.Lock()
-        self.clients = []  # each a send(bytes) callable
+        super().__init__(layout)
+        self.version = tuple(version)
         self.time = 0.0  # s of the controller's time
 
     def cycle(self, dt, read):
@@ -133,12 +131,7 @@ class Primary(object):
         before, self.time = self.time, self.time + dt
         if math.floor(self.time / STATE_PERIOD + 1e-9) == math.floor(before / STATE_PERIOD + 1e-9):
             return
-        with self.lock:
-            clients = list(self.clients)
-        if clients:
-            data = self.layout.pack(read(self.layout.names))
-            for send in clients:
-                send(data)
+        self.send(read)
 
 
 def serve(name, address, primary, run, dashboard, log, port=None):
@@ -161,13 +154,11 @@ def serve(name, address, primary, run, dashboard, log, port=None):
             outbox = listen.Outbox(self.request, SEND_QUEUE, '%s: %s does not read its packages: its connection '
                                    'is closed' % (face, client), log)
             outbox.put(version_message(primary.version))
-            with primary.lock:
-                primary.clients.append(outbox.put)
+            primary.add(outbox.put)
             try:
                 read_programs(self.request, client, face, take, log)
             finally:
-                with primary.lock:
-                    primary.clients.remove(outbox.put)
+                primary.remove(outbox.put)
                 outbox.close()
 
     return listen.serve(face, address, PORTS[name] if port is None else port, Connection, log)

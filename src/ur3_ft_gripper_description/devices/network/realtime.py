@@ -17,7 +17,6 @@ and each program goes to `run(text)`.
 import os
 import socketserver
 import struct
-import threading
 
 import yaml
 
@@ -59,21 +58,11 @@ class Layout(object):
         return self.struct.pack(*flat)
 
 
-class Realtime(object):
-    """The connected clients of the real-time interface and what each cycle sends them."""
-
-    def __init__(self, layout):
-        self.layout = layout
-        self.lock = threading.Lock()
-        self.clients = []  # each a send(bytes) callable
+class Realtime(listen.Broadcast):
+    """The connected clients of the real-time interface: a package each control cycle."""
 
     def cycle(self, read):
-        with self.lock:
-            clients = list(self.clients)
-        if clients:
-            data = self.layout.pack(read(self.layout.names))
-            for send in clients:
-                send(data)
+        self.send(read)
 
 
 def serve(address, realtime, run, log, port=PORT):
@@ -85,13 +74,11 @@ def serve(address, realtime, run, log, port=PORT):
             client = '%s:%d' % self.client_address[:2]
             outbox = listen.Outbox(self.request, SEND_QUEUE, 'real-time interface: %s does not read its packages: '
                                    'its connection is closed' % client, log)
-            with realtime.lock:
-                realtime.clients.append(outbox.put)
+            realtime.add(outbox.put)
             try:
                 read_programs(self.request, client, 'real-time interface', run, log)
             finally:
-                with realtime.lock:
-                    realtime.clients.remove(outbox.put)
+                realtime.remove(outbox.put)
                 outbox.close()
 
     return listen.serve('real-time interface', address, port, Connection, log)
