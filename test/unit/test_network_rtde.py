@@ -219,3 +219,21 @@ def test_a_client_that_does_not_read_loses_its_connection_and_the_others_go_on(c
     assert reader.data()['timestamp'] > 0
     reader.close()
     sleeper.close()
+
+
+def test_the_elbow_moves_as_its_velocity_says(cell):
+    client = cell.client()
+    client.setup_outputs(['timestamp', 'elbow_position', 'elbow_velocity', 'actual_TCP_pose', 'actual_TCP_speed'],
+                         rtde_max_frequency(cell.core))
+    assert client.start()
+    with cell.lock:
+        cell.core.script_command('speedj([0.3, -0.2, 0.25, 0, 0, 0], 5.0, 2.0)')
+    cycles = int(round(1.0 / cell.dt))
+    cell.step(cycles)  # at speed by the end
+    earlier, later = [client.data() for _ in range(cycles)][-2:]
+    dt = later['timestamp'] - earlier['timestamp']
+    for position, velocity in (('elbow_position', 'elbow_velocity'), ('actual_TCP_pose', 'actual_TCP_speed')):
+        moved = (np.array(later[position][:3]) - np.array(earlier[position][:3])) / dt
+        assert np.linalg.norm(moved) > 0.05  # it moves
+        assert moved == pytest.approx(later[velocity][:3], abs=2e-3), position
+    client.close()

@@ -23,7 +23,7 @@ import itertools
 import math
 
 import numpy as np
-from transforms3d.axangles import axangle2mat, mat2axangle
+from transforms3d.axangles import axangle2mat
 
 from ur3_ft_gripper_description import kinematics
 
@@ -70,18 +70,24 @@ class ArmKinematics(object):
         self.all_revolute = all(joint.type in ('revolute', 'continuous') for _, joint, _, _ in self.segments)
         self.segment_fixed = np.array([fixed for fixed, _, _, _ in self.segments])
         self.segment_joint = [index for _, _, _, index in self.segments]
-        self.cross_matrices = np.array([_cross_matrix(axis) for _, _, axis, _ in self.segments])
+        self.segment_axes = np.array([axis for _, _, axis, _ in self.segments])
+        self.cross_matrices = np.array([_cross_matrix(axis) for axis in self.segment_axes])
         self.cross_squared = np.matmul(self.cross_matrices, self.cross_matrices)
         self.nominal = NominalUr.from_arm(self)
+
+    def _links(self, positions):
+        """Each moving joint's fixed transform times its rotation (all revolute), in chain order."""
+        q = np.asarray(positions, dtype=float)[self.segment_joint][:, None, None]
+        turns = np.eye(3) + np.sin(q) * self.cross_matrices + (1.0 - np.cos(q)) * self.cross_squared
+        links = self.segment_fixed.copy()
+        links[:, :3, :3] = np.matmul(self.segment_fixed[:, :3, :3], turns)
+        return links
 
     def forward(self, positions):
         """4x4 pose of the tip in the base for joint positions in `joints` order."""
         if not self.all_revolute:
             return self._chain(positions)[0]
-        q = np.asarray(positions, dtype=float)[self.segment_joint][:, None, None]
-        turns = np.eye(3) + np.sin(q) * self.cross_matrices + (1.0 - np.cos(q)) * self.cross_squared
-        links = self.segment_fixed.copy()
-        links[:, :3, :3] = np.matmul(self.segment_fixed[:, :3, :3], turns)
+        links = self._links(positions)
         pose = links[0]
         for link in links[1:]:
             pose = pose.dot(link)
@@ -89,6 +95,18 @@ class ArmKinematics(object):
 
     def _chain(self, positions):
         """The tip's pose, and each actuated joint's axis and origin in the base (controller order)."""
+        if self.all_revolute:
+            # A joint turns about its own axis through its frame's origin: the frame after the turn
+            # has the same axis and origin, so the running product of the links gives both.
+            frames = [None] * len(self.segments)
+            pose = np.eye(4)
+            for i, link in enumerate(self._links(positions)):
+                pose = frames[i] = pose.dot(link)
+            frames = np.array(frames)
+            axes, points = np.empty((len(self.joints), 3)), np.empty((len(self.joints), 3))
+            axes[self.segment_joint] = np.einsum('nij,nj->ni', frames[:, :3, :3], self.segment_axes)
+            points[self.segment_joint] = frames[:, :3, 3]
+            return pose.dot(self.tail), axes, points
         t = np.eye(4)
         axes, points = [None] * len(self.joints), [None] * len(self.joints)
         for fixed, joint, axis, index in self.segments:
@@ -362,8 +380,12 @@ def rotation_vector(rotation):
     if sine < 1e-9:
         if angle < 1.0:
             return v / 2.0
-        axis, angle = mat2axangle(rotation)  # half a turn: the axis from the matrix itself
-        return np.asarray(axis) * angle
+        # Half a turn: R = 2 a a^T - I, so a a^T = (R + I) / 2; its largest diagonal term's column is
+        # the axis, scaled (a closed form of mat2axangle's eigenvector, without an eigensolver).
+        outer = (rotation + rotation.T + 2.0 * np.eye(3)) / 4.0
+        k = int(np.argmax(np.diag(outer)))
+        axis = outer[:, k] / np.sqrt(outer[k, k])
+        return (-axis if axis.dot(v) < 0.0 else axis) * angle
     return v * angle / (2.0 * sine)
 
 

@@ -68,8 +68,16 @@ class NetworkFaces(object):
             server.server_close()
 
     def after_cycle(self, dt, snapshot):
-        """The cycle's data to the faces that stream it (the caller holds the core's lock)."""
-        read = lambda names: [self._reader(name)(self.core, snapshot) for name in names]  # noqa: E731
+        """The cycle's data to the faces that stream it (the caller holds the core's lock). Each value is
+        computed once a cycle, however many faces and clients read it."""
+        values = {}
+
+        def read(names):
+            missing = [name for name in names if name not in values]
+            for name in missing:
+                values[name] = self._reader(name)(self.core, snapshot)
+            return [values[name] for name in names]
+
         self.rtde.cycle(read)
         self.realtime.cycle(read)
         self.primary.cycle(dt, read)

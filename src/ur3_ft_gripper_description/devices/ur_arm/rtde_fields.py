@@ -73,11 +73,19 @@ def _pose(matrix):
     return tm.ur_pose_of(matrix)
 
 
-def _elbow(core, q, qd):
-    """The elbow joint's origin in the base and its velocity (third joint of the chain)."""
-    axes, points = core.arm.joint_axes(q)
-    velocity = sum(qd[i] * np.cross(axes[i], points[2] - points[i]) for i in range(2))
-    return [float(v) for v in points[2]], [float(v) for v in velocity]
+def _elbow_position(core, snapshot):
+    """The elbow joint's origin in the base (the third joint of the chain)."""
+    return [float(v) for v in core.arm.joint_axes(snapshot.position)[1][2]]
+
+
+def _elbow_velocity(core, snapshot):
+    """The elbow's velocity: the shoulder joints' turns about their axes, at the elbow."""
+    qd = snapshot.velocity
+    if not np.any(qd[:2]):
+        return [0.0, 0.0, 0.0]  # at rest: no kinematics needed
+    axes, points = core.arm.joint_axes(snapshot.position)
+    return [float(v) for v in qd[0] * np.cross(axes[0], points[2] - points[0]) +
+            qd[1] * np.cross(axes[1], points[2] - points[1])]
 
 
 def _register_bits(registers, direction, first):
@@ -98,7 +106,15 @@ def _registers(name):
 
 
 def _tcp_speed(core, q, qd):
+    if not np.any(qd):
+        return [0.0] * 6  # at rest: no kinematics needed
     return [float(v) for v in tm.tcp_jacobian(core.arm, core.tcp, q).dot(qd)]
+
+
+def _target_pose(core, snapshot):
+    if np.array_equal(core.target_position, snapshot.position):
+        return _pose(snapshot.tool_pose)  # holding where it is: the actual pose, already computed
+    return _pose(tm.tcp_pose(core.arm, core.tcp, core.target_position))
 
 
 def _flange_in_base(core):
@@ -126,12 +142,12 @@ COMPUTED = {
     'actual_TCP_pose': lambda c, s: _pose(s.tool_pose),
     'actual_TCP_speed': lambda c, s: _tcp_speed(c, s.position, s.velocity),
     'actual_TCP_force': lambda c, s: [float(v) for v in c.tcp_force()[0]],
-    'target_TCP_pose': lambda c, s: _pose(tm.tcp_pose(c.arm, c.tcp, c.target_position)),
+    'target_TCP_pose': _target_pose,
     'target_TCP_speed': lambda c, s: _tcp_speed(c, c.target_position, c.target_velocity),
     'ft_raw_wrench': lambda c, s: _flange_in_base(c),
     'tcp_offset': lambda c, s: _pose(c.tcp),
-    'elbow_position': lambda c, s: _elbow(c, s.position, s.velocity)[0],
-    'elbow_velocity': lambda c, s: _elbow(c, s.position, s.velocity)[1],
+    'elbow_position': _elbow_position,
+    'elbow_velocity': _elbow_velocity,
     'actual_tool_accelerometer': lambda c, s: [float(v) for v in s.tool_pose[:3, :3].T.dot([0.0, 0.0, GRAVITY])],
     'actual_digital_input_bits': lambda c, s: _bits(s.digital_in),
     'actual_digital_output_bits': lambda c, s: _bits(s.digital_out),
