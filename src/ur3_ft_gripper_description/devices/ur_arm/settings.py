@@ -75,7 +75,7 @@ PARAMETERS = (
                      sim_params.flag),
     sim_params.Param('~headless_mode', False, "As ur_robot_driver's: resend_robot_program starts the program "
                      '(true) or dashboard play does (false)', sim_params.flag),
-    sim_params.Param('~robot_ip', '', "The controller's own network interfaces (the Dashboard Server on 29999) "
+    sim_params.Param('~robot_ip', '', "The controller's own network interfaces (the Dashboard Server on 29999, primary and secondary 30001-30002, real-time 30003, RTDE 30004) "
                      'listen on this IPv4 address, e.g. 127.0.0.1, or 127.0.0.2 for a second cell on the machine; '
                      'empty: none', robot_ip),
 ) + arm_cell.PARAMETERS + sim_clock.PARAMETERS
