@@ -59,6 +59,8 @@ NOT_RUN_HERE = [
     ('export UR3_FT_GRIPPER_UPSTREAM', 'a setting (the quickstart reads it)'),
     ('rostopic ', 'needs the running devices; test/rostest speaks the same interfaces'),
     ('rosservice ', 'needs the running devices; test/rostest speaks the same interfaces'),
+    ('rosrun ur3_ft_gripper_description ur_controller_sim', 'runs until stopped: test_controller_sim.py starts it '
+                                                            'so and talks to every interface'),
     ("printf 'def from_network", 'needs the simulated controller running with an address: test/rostest/'
                                  'network_faces.test sends the same program to it'),
     ("printf 'robotmode", 'needs the simulated controller running with an address: test/rostest/'

@@ -1,0 +1,125 @@
+"""The simulated UR controller alone, without ROS: its network interfaces on the robot's address, as URSim.
+
+    ur_controller_sim --ur-type ur5e [--robot-ip 127.0.0.1] [--kinematics-params my_robot_calibration.yaml]
+
+For code that talks to the robot itself rather than to ROS: ur_robot_driver
+(started with robot_ip:=127.0.0.1, as against URSim), ur_rtde, dashboard
+clients. The controller's core (core.ArmCore, kinematic joints) runs on the
+wall clock at the generation's control rate, with the Dashboard Server,
+the primary, secondary and real-time interfaces and RTDE (network_faces.py)
+over it; no ROS node, topic or parameter. The model (its joint limits and
+kinematics, which the primary interface reports and the driver checks its
+calibration against) is the package's, expanded for the given UR type.
+Bad input (an unknown model, an address the machine does not have, a port
+taken) ends it with one line naming the problem and the fix.
+"""
+
+import argparse
+import os
+import sys
+import threading
+import time
+
+from ..network import listen
+
+PERIOD = {'CB3': 0.008, 'e-Series': 0.002}
+# Behind the wall clock by more than this many periods (a stalled machine), the controller skips ahead
+# rather than racing to catch up, as a real-time controller cannot catch up either.
+MOST_BEHIND = 10
+
+
+class ControllerError(RuntimeError):
+    """A controller that cannot start: one line naming the problem and the fix."""
+
+
+def build(ur_type, robot_ip, kinematics_params='', log=None):
+    """(core, faces) of `ur_type`, its faces listening on `robot_ip` (not yet serving)."""
+    import rospkg
+    from ...model import description, export
+    from ...model.names import DescriptionError
+    from .. import sim_params
+    from . import core as arm_core
+    from . import joints, software
+    from .network_faces import NetworkFaces
+    from .settings import read_settings
+
+    try:
+        software.for_model(ur_type)
+        urdf = description.to_xml(description.expand_model(export.model_mappings(
+            ur_type=ur_type, kinematics_params=kinematics_params)))
+        config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config',
+                              '%s_controllers.yaml' % ur_type)
+        values = {'~ur_type': ur_type, '~controller_config_file': config, 'robot_description': urdf,
+                  '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller'}
+        settings = read_settings(lambda name, default=None: values.get(name, default))
+    except (software.UnknownModel, DescriptionError, sim_params.ParamError) as error:
+        raise ControllerError(str(error)) from None
+    core = arm_core.ArmCore(settings, joints.KinematicJoints.from_settings(settings))
+    lock = threading.RLock()
+
+    def call(method, *args):
+        with lock:
+            return method(*args)
+
+    try:
+        faces = NetworkFaces(listen.checked_address(robot_ip), core, call, log or say)
+    except listen.ListenError as error:
+        raise ControllerError(str(error)) from None
+    return core, faces, lock
+
+
+def say(text):
+    print('ur_controller_sim: %s' % text, file=sys.stderr, flush=True)
+
+
+def run(core, faces, lock, stop):
+    """Step the controller every period of the wall clock until `stop` (a threading.Event) is set."""
+    period = PERIOD[core.software.generation]
+    deadline = time.monotonic()
+    while not stop.is_set():
+        with lock:
+            snapshot = core.step(period)
+            faces.after_cycle(period, snapshot)
+            for level, text in core.take_messages():
+                say('%s: %s' % (level, text))
+        deadline += period
+        late = time.monotonic() - deadline
+        if late > MOST_BEHIND * period:
+            deadline = time.monotonic()
+        elif late < 0:
+            stop.wait(-late)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--ur-type', default='ur5e', help='UR model (ur3, ur5e, ...): its software version, '
+                                                         'generation and kinematics (default: ur5e)')
+    parser.add_argument('--robot-ip', default=listen.LOOPBACK,
+                        help='the address the interfaces listen on, as a robot\'s IP (default: %s, this machine '
+                             'only; 127.0.0.2 for a second controller)' % listen.LOOPBACK)
+    parser.add_argument('--kinematics-params', default='',
+                        help='a calibration YAML (ur_calibration\'s output) instead of ur_description\'s default')
+    # roslaunch appends its own name:=value arguments (__name, __log) to any program it starts.
+    args = parser.parse_args([a for a in (sys.argv[1:] if argv is None else argv) if ':=' not in a])
+    if args.kinematics_params and not os.path.isfile(args.kinematics_params):
+        say('--kinematics-params: there is no file %s: give your robot\'s calibration YAML (ur_calibration\'s '
+            'output), or leave it out for ur_description\'s default' % args.kinematics_params)
+        return 1
+    try:
+        core, faces, lock = build(args.ur_type, args.robot_ip, args.kinematics_params)
+    except ControllerError as error:
+        say(str(error))
+        return 1
+    faces.start()
+    for server in faces.servers:
+        say('%s on %s:%d' % (server.name, *server.server_address[:2]))
+    if not listen.is_loopback(args.robot_ip):
+        say('the interfaces listen on %s, beyond this machine' % args.robot_ip)
+    stop = threading.Event()
+    try:
+        run(core, faces, lock, stop)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        faces.shutdown()
+    return 0
