@@ -11,6 +11,7 @@ compares the hash with ur_description's default_kinematics.yaml.
 """
 import math
 import os
+import select
 import socket
 import struct
 import time
@@ -195,3 +196,37 @@ def test_the_primary_interface_takes_its_commands_and_the_secondary_a_program(ce
     assert struct.unpack_from('>i', subs[MASTERBOARD_DATA], 4)[0] == 1 << 4
     primary.close()
     secondary.close()
+
+
+def robot_messages(client, cell, condition, what, seconds=30.0):
+    """Step the cell until the robot messages read satisfy condition(messages); the messages, each (type,
+    body after the message header). The faces' threads take text in while it steps (the wall clock)."""
+    deadline, messages = time.monotonic() + seconds, []
+    while not condition(messages):
+        assert time.monotonic() < deadline, '%s: not within %g s; read %r' % (what, seconds, messages)
+        cell.step()
+        while select.select([client.socket], [], [], 0)[0]:
+            kind, body = client.package()
+            if kind == ROBOT_MESSAGE:
+                messages.append((body[9], body[10:]))
+    return messages
+
+
+def key(message):
+    """(title, text) of a KEY message's body: code, argument, the title's size, the title, the text."""
+    size = message[8]
+    return message[9:9 + size].decode(), message[9 + size:].decode()
+
+
+def test_the_primary_interface_announces_a_programs_start_and_end_and_its_runtime_exception(cell):
+    client = PrimaryClient(cell.faces.port('primary'))
+    client.package()
+    client.send('def announced():\n  sleep(0.1)\nend\n')
+    keys = lambda messages: [key(body) for kind, body in messages if kind == 7]  # noqa: E731
+    robot_messages(client, cell, lambda m: ('PROGRAM_XXX_STOPPED', 'announced') in keys(m), 'the program\'s end')
+    client.send('def failing():\n  x = [1, 2]\n  y = x[5]\nend\n')
+    messages = robot_messages(client, cell, lambda m: any(kind == 10 for kind, _ in m), 'the runtime exception')
+    assert ('PROGRAM_XXX_STARTED', 'failing') in keys(messages)
+    line, column = struct.unpack_from('>II', [body for kind, body in messages if kind == 10][0])
+    assert line == 3
+    client.close()

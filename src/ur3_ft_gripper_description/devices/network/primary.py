@@ -27,8 +27,13 @@ from .rtde import _available
 from .script_text import read_programs
 
 PORTS = {'primary': 30001, 'secondary': 30002}
-ROBOT_STATE, ROBOT_MESSAGE, VERSION = 16, 20, 3
-SOURCE_CONTROLLER = -2  # the robot message source of the version message
+ROBOT_STATE, ROBOT_MESSAGE = 16, 20
+VERSION, KEY, RUNTIME_EXCEPTION = 3, 7, 10  # robot message types
+# Robot message sources as ur_client_library's captures have them: the controller's own messages, and
+# the runtime's (runtime exceptions).
+SOURCE_CONTROLLER, SOURCE_RUNTIME = -2, -3
+# The KEY message's title of each program event, literally as the controller sends it.
+KEY_TITLES = {'PROGRAM_STARTED': 'PROGRAM_XXX_STARTED', 'PROGRAM_STOPPED': 'PROGRAM_XXX_STOPPED'}
 PROJECT_NAME, BUILD_DATE = b'URControl', b'simulated'
 STATE_PERIOD = 0.1  # s of the controller's time: 10 Hz
 TYPES = {'int8': 'b', 'uint8': 'B', 'bool': '?', 'int16': 'h', 'int32': 'i', 'uint32': 'I', 'uint64': 'Q',
@@ -111,11 +116,30 @@ def _cast(value, kind):
     return int(value)
 
 
+def robot_message(kind, source, body, timestamp=0):
+    """A robot message package: its header (time stamp, source, type), then `body`."""
+    data = struct.pack('>QbB', timestamp, source, kind) + body
+    return struct.pack('>iB', 5 + len(data), ROBOT_MESSAGE) + data
+
+
 def version_message(version, timestamp=0):
     """The robot message of type VERSION for software `version` (major, minor, bugfix, build)."""
-    body = struct.pack('>QbBb', timestamp, SOURCE_CONTROLLER, VERSION, len(PROJECT_NAME)) + PROJECT_NAME + \
-        struct.pack('>BBii', *version[:4]) + BUILD_DATE
-    return struct.pack('>iB', 5 + len(body), ROBOT_MESSAGE) + body
+    return robot_message(VERSION, SOURCE_CONTROLLER, struct.pack('>b', len(PROJECT_NAME)) + PROJECT_NAME +
+                         struct.pack('>BBii', *version[:4]) + BUILD_DATE, timestamp)
+
+
+def key_message(title, text, timestamp=0):
+    """A KEY robot message, as the controller announces a program: title PROGRAM_XXX_STARTED or
+    PROGRAM_XXX_STOPPED, text the program's name (ur_client_library's sendScriptBlocking waits for both)."""
+    title = title.encode('utf-8')
+    return robot_message(KEY, SOURCE_CONTROLLER, struct.pack('>iiB', 0, 0, len(title)) + title + text.encode('utf-8'),
+                         timestamp)
+
+
+def runtime_exception_message(line, column, text, timestamp=0):
+    """A RUNTIME_EXCEPTION robot message: where the program failed, and why."""
+    return robot_message(RUNTIME_EXCEPTION, SOURCE_RUNTIME, struct.pack('>II', line, column) + text.encode('utf-8'),
+                         timestamp)
 
 
 class Primary(listen.Broadcast):
@@ -125,9 +149,25 @@ class Primary(listen.Broadcast):
         super().__init__(layout)
         self.version = tuple(version)
         self.time = 0.0  # s of the controller's time
+        self.message_clients = []  # the primary interface's clients: its robot messages too
 
-    def cycle(self, dt, read):
-        """After a control cycle of `dt` s: a state on the cycle that reaches each tenth of a second."""
+    def tell(self, message):
+        """A robot message to the primary interface's clients (the secondary sends only states)."""
+        with self.lock:
+            clients = list(self.message_clients)
+        for send in clients:
+            send(message)
+
+    def cycle(self, dt, read, events=()):
+        """After a control cycle of `dt` s: its program events as robot messages (('PROGRAM_STARTED' or
+        'PROGRAM_STOPPED', name) or ('RUNTIME_EXCEPTION', line, column, text)), and a state on the cycle
+        that reaches each tenth of a second."""
+        stamp = int(round((self.time + dt) * 1000.0))
+        for event in events:
+            if event[0] == 'RUNTIME_EXCEPTION':
+                self.tell(runtime_exception_message(*event[1:], timestamp=stamp))
+            else:
+                self.tell(key_message(KEY_TITLES[event[0]], event[1], timestamp=stamp))
         before, self.time = self.time, self.time + dt
         if math.floor(self.time / STATE_PERIOD + 1e-9) == math.floor(before / STATE_PERIOD + 1e-9):
             return
@@ -155,10 +195,16 @@ def serve(name, address, primary, run, dashboard, log, port=None):
                                    'is closed' % (face, client), log)
             outbox.put(version_message(primary.version))
             primary.add(outbox.put)
+            if name == 'primary':
+                with primary.lock:
+                    primary.message_clients.append(outbox.put)
             try:
                 read_programs(self.request, client, face, take, log)
             finally:
                 primary.remove(outbox.put)
+                if name == 'primary':
+                    with primary.lock:
+                        primary.message_clients.remove(outbox.put)
                 outbox.close()
 
     return listen.serve(face, address, PORTS[name] if port is None else port, Connection, log)

@@ -70,6 +70,8 @@ READ_ONLY = ('joint_state_controller', 'speed_scaling_state_controller', 'force_
 SET_MODE_TIMEOUT = 30.0
 # Log levels of the lines the core has to say (the node writes them to rosout).
 ERROR, WARN, INFO = 'error', 'warn', 'info'
+PROGRAM_STARTED, PROGRAM_STOPPED, RUNTIME_EXCEPTION = 'PROGRAM_STARTED', 'PROGRAM_STOPPED', 'RUNTIME_EXCEPTION'
+PROGRAM_EVENTS = 100  # program events kept for the faces between two cycles
 
 # What became of a goal that ended: the controller, the goal id the request gave, its Outcome.
 Finished = collections.namedtuple('Finished', 'controller goal_id outcome')
@@ -200,6 +202,11 @@ class ArmCore(object):
         self.stopped_by_program = []
         self.finished = []           # Finished, for the node to report
         self.messages = []           # (level, text), for the node to log
+        # What the controller tells its primary interface's clients of its programs: (PROGRAM_STARTED or
+        # PROGRAM_STOPPED, the program's name) and (RUNTIME_EXCEPTION, line, column, text); the latest
+        # only, for a host without such clients never takes them.
+        self.program_events = collections.deque(maxlen=PROGRAM_EVENTS)
+        self.script_name = None      # the running primary program's name
         for name in self.trajectory_controllers:
             if self.manager.controllers[name].running:
                 self.trajectory_controllers[name].start(self.held)
@@ -213,6 +220,11 @@ class ArmCore(object):
     def take_messages(self):
         messages, self.messages = self.messages, []
         return messages
+
+    def take_program_events(self):
+        events = list(self.program_events)
+        self.program_events.clear()
+        return events
 
     def _say(self, level, text):
         self.messages.append((level, text))
@@ -523,8 +535,12 @@ class ArmCore(object):
             return
         if self.script_run is not None:
             self.script_run.stop()
+            self.program_events.append((PROGRAM_STOPPED, self.script_name))
         self.script_robot.start()
         self.script_run = urscript.Run(program, self.script_robot)
+        # A program of bare statements has no name; the controller names it after nothing either.
+        self.script_name = program.name or ''
+        self.program_events.append((PROGRAM_STARTED, self.script_name))
 
     def _step_run(self, run, dt):
         """One cycle of a program; a runtime error is the robot's runtime exception, in its log."""
@@ -533,6 +549,8 @@ class ArmCore(object):
             self._runtime_exception(run.error)
 
     def _runtime_exception(self, fault):
+        self.program_events.append((RUNTIME_EXCEPTION, getattr(fault, 'line', 0), getattr(fault, 'column', 0),
+                                    getattr(fault, 'text', str(fault))))
         # ur_client_library prints the robot's runtime exception over three lines: one here.
         text = ' '.join(line.strip() for line in str(fault).splitlines())
         self.robot.add_log(text)
@@ -545,6 +563,7 @@ class ArmCore(object):
     def _end_script(self):
         if self.script_run is not None:
             self.script_run.stop()
+            self.program_events.append((PROGRAM_STOPPED, self.script_name))
         self.script_run = None
         self.script_robot.finish()
         self.robot.script_finished()

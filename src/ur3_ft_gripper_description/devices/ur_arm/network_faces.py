@@ -80,7 +80,7 @@ class NetworkFaces(object):
 
         self.rtde.cycle(read)
         self.realtime.cycle(read)
-        self.primary.cycle(dt, read)
+        self.primary.cycle(dt, read, self.core.take_program_events())
 
     def _reader(self, name):
         reader = self.readers.get(name)
