@@ -34,6 +34,7 @@ NODE_PARAMETER_TABLES = {
     'robotiq2FGripper': 'ur3_ft_gripper_description.devices.gripper_sim:PARAMETERS',
     'gripper_joint_states': 'ur3_ft_gripper_description.devices.gripper_joint_states:PARAMETERS',
     'ur_hardware_interface': 'ur3_ft_gripper_description.devices.ur_arm.settings:PARAMETERS',
+    'ur_controller_sim': 'ur3_ft_gripper_description.devices.ur_arm.controller_sim:PARAMETERS',
 }
 
 

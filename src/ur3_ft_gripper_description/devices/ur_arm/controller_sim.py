@@ -23,6 +23,9 @@ import time
 from ..network import listen
 
 PERIOD = {'CB3': 0.008, 'e-Series': 0.002}
+# No ROS parameters: the controller takes its command line (--ur-type, --robot-ip, --kinematics-params),
+# as a program that is not a ROS node.
+PARAMETERS = ()
 # Behind the wall clock by more than this many periods (a stalled machine), the controller skips ahead
 # rather than racing to catch up, as a real-time controller cannot catch up either.
 MOST_BEHIND = 10

@@ -29,12 +29,16 @@ urscript.RuntimeFault, which stops the program as the robot's runtime
 exception does.
 """
 
+import math
+import struct
+
 import numpy as np
 
 from ...urscript import Blocking, Pose, RuntimeFault
 from ...urscript.values import to_str
 from . import cartesian
 from . import force_mode as fm
+from . import script_sockets as ss
 from . import tool_motion as tm
 from .arm_kinematics import rigid_inverse
 from .registers import BOOLEAN, FLOAT, INTEGER, RegisterError
@@ -198,6 +202,25 @@ def _signatures(e_series, version):
                            error=False, blocking=False),
         'get_steptime': Signature(now),
         'set_gravity': Signature(now, 'd'),
+        'socket_open': Signature(move, 'address', 'port', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_close': Signature(now, 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_send_string': Signature(now, 'str', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_send_line': Signature(now, 'str', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_send_byte': Signature(now, 'value', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_send_int': Signature(now, 'value', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_set_var': Signature(now, 'name', 'value', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_get_var': Signature(move, 'name', 'socket_name', socket_name=ss.DEFAULT_SOCKET),
+        'socket_read_binary_integer': Signature(move, 'number', 'socket_name', 'timeout', socket_name=ss.DEFAULT_SOCKET,
+                                                timeout=ss.READ_TIMEOUT),
+        'socket_read_byte_list': Signature(move, 'number', 'socket_name', 'timeout', socket_name=ss.DEFAULT_SOCKET,
+                                           timeout=ss.READ_TIMEOUT),
+        'socket_read_ascii_float': Signature(move, 'number', 'socket_name', 'timeout', socket_name=ss.DEFAULT_SOCKET,
+                                             timeout=ss.READ_TIMEOUT),
+        'socket_read_line': Signature(move, 'socket_name', 'timeout', socket_name=ss.DEFAULT_SOCKET,
+                                      timeout=ss.READ_TIMEOUT),
+        'socket_read_string': Signature(move, 'socket_name', 'prefix', 'suffix', 'interpret_escape', 'timeout',
+                                        socket_name=ss.DEFAULT_SOCKET, prefix='', suffix='', interpret_escape=False,
+                                        timeout=ss.READ_TIMEOUT),
         'freedrive_mode': Signature(now),
         'end_freedrive_mode': Signature(now),
         'teach_mode': Signature(now),
@@ -237,6 +260,12 @@ def _pose(matrix):
     return Pose(tm.ur_pose_of(matrix))
 
 
+def _text(value, what):
+    if not isinstance(value, str):
+        raise RuntimeFault('%s must be a string, not %s' % (what, to_str(value)))
+    return value
+
+
 class ScriptRobot(object):
     """The robot's functions for programs, over the arm's core (core.ArmCore) it belongs to."""
 
@@ -251,6 +280,7 @@ class ScriptRobot(object):
         self.force_offset = np.eye(4)  # force mode's displacement of the TCP (base axes, about the TCP)
         self.commanded = None         # the joints commanded last cycle
         self.commanded_speed = np.zeros(6)
+        self.sockets = ss.ScriptSockets(lambda: core.uptime)
 
     def served(self):
         """{name: whether a call takes physical time}, for urscript.compile_script."""
@@ -271,8 +301,10 @@ class ScriptRobot(object):
         return self.motion is not None and not self.motion.done
 
     def finish(self):
-        """The program ended: force mode ends, and a speed motion still running decelerates."""
+        """The program ended: force mode ends, a speed motion still running decelerates, and its sockets
+        close."""
         self._end_force_mode()
+        self.sockets.close_all()
         if self.moving and isinstance(self.motion, (tm.ToolSpeed, tm.JointSpeed)) and \
                 not isinstance(self.motion, (tm.ToolStop, tm.JointStop)):
             self.motion = tm.JointStop(self.core.arm, self.planned, self.commanded_speed,
@@ -622,6 +654,62 @@ class ScriptRobot(object):
             self.core.robot.registers.write(direction, kind, address, value)
         except RegisterError as error:
             raise RuntimeFault('%s: %s' % (name, error)) from None
+
+    # sockets (script_sockets.py): the robot is the client
+
+    def _socket_open(self, address, port, socket_name):
+        return self.sockets.open(_text(address, 'socket_open: address'), port, _text(socket_name, 'socket_name'))
+
+    def _socket_close(self, socket_name):
+        self.sockets.close(_text(socket_name, 'socket_name'))
+
+    def _socket_send_string(self, str, socket_name):
+        return self.sockets.send(to_str(str).encode('latin-1', 'replace'), _text(socket_name, 'socket_name'))
+
+    def _socket_send_line(self, str, socket_name):
+        return self.sockets.send((to_str(str) + '\n').encode('latin-1', 'replace'), _text(socket_name, 'socket_name'))
+
+    def _socket_send_byte(self, value, socket_name):
+        if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 255:
+            raise RuntimeFault('socket_send_byte: value must be an integer from 0 to 255, not %s' % to_str(value))
+        return self.sockets.send(bytes([value]), _text(socket_name, 'socket_name'))
+
+    def _socket_send_int(self, value, socket_name):
+        if isinstance(value, bool) or not isinstance(value, int) or not -2 ** 31 <= value < 2 ** 31:
+            raise RuntimeFault('socket_send_int: value must be a 32-bit integer, not %s' % to_str(value))
+        return self.sockets.send(struct.pack('>i', value), _text(socket_name, 'socket_name'))
+
+    def _socket_set_var(self, name, value, socket_name):
+        self.sockets.send(('SET %s %s\n' % (_text(name, 'socket_set_var: name'), to_str(value))).encode('latin-1'),
+                          _text(socket_name, 'socket_name'))
+
+    def _socket_get_var(self, name, socket_name):
+        name, socket_name = _text(name, 'socket_get_var: name'), _text(socket_name, 'socket_name')
+        self.sockets.send(('GET %s\n' % name).encode('latin-1'), socket_name)
+        return self.sockets.read(socket_name, ss.variable(name), ss.READ_TIMEOUT, 0)
+
+    def _socket_read_binary_integer(self, number, socket_name, timeout):
+        number = ss.checked_count(number, 'socket_read_binary_integer')
+        return self.sockets.read(_text(socket_name, 'socket_name'), ss.binary_integers(number), timeout,
+                                 ss.number_failure(number, -1))
+
+    def _socket_read_byte_list(self, number, socket_name, timeout):
+        number = ss.checked_count(number, 'socket_read_byte_list')
+        return self.sockets.read(_text(socket_name, 'socket_name'), ss.byte_list(number), timeout,
+                                 ss.number_failure(number, -1))
+
+    def _socket_read_ascii_float(self, number, socket_name, timeout):
+        number = ss.checked_count(number, 'socket_read_ascii_float')
+        return self.sockets.read(_text(socket_name, 'socket_name'), ss.ascii_floats(number), timeout,
+                                 ss.number_failure(number, math.nan))
+
+    def _socket_read_line(self, socket_name, timeout):
+        return self.sockets.read(_text(socket_name, 'socket_name'), ss.line, timeout, '')
+
+    def _socket_read_string(self, socket_name, prefix, suffix, interpret_escape, timeout):
+        return self.sockets.read(_text(socket_name, 'socket_name'),
+                                 ss.string(_text(prefix, 'prefix'), _text(suffix, 'suffix'), bool(interpret_escape)),
+                                 timeout, '')
 
     # the log and the rest
 
