@@ -205,6 +205,9 @@ def render_node_page(tables, declared_in):
         lines += ['## %s' % node, '']
         if summary:
             lines += textwrap.wrap(prose(summary), 100, break_on_hyphens=False, break_long_words=False) + ['']
+        if not table:
+            lines += ['No ROS parameters (`%s` in `%s` is empty): it takes its command line.' % (attribute, module), '']
+            continue
         lines += ['Declared in `%s` (`%s`).' % (module, attribute), '',
                   '| parameter | default | meaning |', '| --- | --- | --- |']
         for entry in table:
