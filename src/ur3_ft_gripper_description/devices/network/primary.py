@@ -23,7 +23,7 @@ import struct
 import yaml
 
 from . import listen
-from .rtde import _available
+from .versions import available
 from .script_text import read_programs
 
 PORTS = {'primary': 30001, 'secondary': 30002}
@@ -71,7 +71,7 @@ class StateLayout(object):
             package = table['robot_state_sub_packages'][name]
             repeat = package.get('repeat', 1)
             fields = [f for f in package.get('per_joint') or package['fields']
-                      if _available(f, generation, version) and 'only_if' not in f]
+                      if available(f, generation, version) and 'only_if' not in f]
             fmt, items = '>iB', []
             for joint in range(repeat):
                 for field in fields:

@@ -21,7 +21,7 @@ import struct
 import yaml
 
 from . import listen
-from .rtde import _available
+from .versions import available
 from .script_text import read_programs
 
 PORT = 30003
@@ -38,7 +38,7 @@ class Layout(object):
 
     def __init__(self, generation, version, path=None):
         with open(path or default_layout_file()) as stream:
-            fields = [f for f in yaml.safe_load(stream)['fields'] if _available(f, generation, version)]
+            fields = [f for f in yaml.safe_load(stream)['fields'] if available(f, generation, version)]
         self.names = [f['rtde'] for f in fields if f['rtde'] is not None]
         # Where each value goes: ('read', index in names, count) or ('fixed', value, count).
         self.parts = [('read', self.names.index(f['rtde']), f['count']) if f['rtde'] is not None

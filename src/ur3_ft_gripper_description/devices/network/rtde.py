@@ -29,6 +29,7 @@ import threading
 import yaml
 
 from . import listen
+from .versions import available
 
 PORT = 30004
 HEADER = struct.Struct('>HB')
@@ -69,16 +70,6 @@ def default_table_file():
     return os.path.join(os.path.dirname(__file__), '..', '..', '..', '..', 'config', 'rtde_variables.yaml')
 
 
-def _version(text):
-    return None if text is None else tuple(int(part) for part in str(text).split('.'))
-
-
-def _available(entry, generation, version):
-    first = _version(entry.get(generation))
-    removed = _version(entry.get('removed'))
-    return first is not None and version[:len(first)] >= first and (removed is None or version < removed)
-
-
 def read_table(generation, version, path=None):
     """{'outputs': {name: type}, 'inputs': {name: type}}: the guide's fields a controller of `generation`
     ('cb3' or 'e_series') at software `version` (a tuple) has, register ranges expanded."""
@@ -89,11 +80,11 @@ def read_table(generation, version, path=None):
         fields = table[direction] = {}
         for name, entry in data[direction].items():
             if '{n}' not in name:
-                if _available(entry, generation, version):
+                if available(entry, generation, version):
                     fields[name] = entry['type']
                 continue
             for span in entry['ranges']:
-                if _available(dict(span, removed=entry.get('removed')), generation, version):
+                if available(dict(span, removed=entry.get('removed')), generation, version):
                     for index in range(span['first'], span['last'] + 1):
                         fields[name.replace('{n}', str(index))] = entry['type']
     return table
