@@ -19,7 +19,6 @@ each case over no client. Figures, not pass/fail.
 """
 import argparse
 import multiprocessing
-import os
 import socket
 import struct
 import sys
@@ -47,28 +46,11 @@ def say(text):
 
 
 def new_cell(ur_type, loop_hz):
-    """(core, faces, dt): the kinematic core of `ur_type` with its faces listening on free loopback ports."""
-    import rospkg
-    from ur3_ft_gripper_description.devices.ur_arm import core as arm_core
-    from ur3_ft_gripper_description.devices.ur_arm import joints
-    from ur3_ft_gripper_description.devices.ur_arm.network_faces import PORTS, NetworkFaces
-    from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
-    from ur3_ft_gripper_description.model import description, export
-
-    mappings = export.model_mappings(ur_type=ur_type)
-    urdf = description.to_xml(description.expand_model(mappings))
-    config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', '%s_controllers.yaml' % ur_type)
-    values = {'~ur_type': ur_type, '~controller_config_file': config, 'robot_description': urdf,
-              '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller', '~loop_hz': loop_hz}
-    settings = read_settings(lambda name, default=None: values.get(name, default))
-    core = arm_core.ArmCore(settings, joints.KinematicJoints.from_settings(settings))
-    lock = threading.RLock()
-
-    def call(method, *args):
-        with lock:
-            return method(*args)
-
-    faces = NetworkFaces('127.0.0.1', core, call, lambda text: say(text), ports={name: 0 for name in PORTS})
+    """(core, faces, dt): the kinematic core of `ur_type` with its faces listening on free loopback ports,
+    as ur_controller_sim builds them."""
+    from ur3_ft_gripper_description.devices.ur_arm.controller_sim import build
+    from ur3_ft_gripper_description.devices.ur_arm.network_faces import PORTS
+    core, faces, _ = build(ur_type, '127.0.0.1', log=say, ports={name: 0 for name in PORTS})
     faces.start()
     return core, faces, 1.0 / loop_hz
 

@@ -16,12 +16,12 @@ programs go to `run(text)` and the controller commands to `dashboard(command)`.
 """
 
 import math
-import os
 import socketserver
 import struct
 
 import yaml
 
+from ..sim_params import PackageFile
 from . import listen
 from .versions import available
 from .script_text import read_programs
@@ -46,8 +46,7 @@ PRIMARY_COMMANDS = {'power on': 'power on', 'power off': 'power off', 'set robot
 SEND_QUEUE = 100
 
 
-def default_table_file():
-    return os.path.join(os.path.dirname(__file__), '..', '..', '..', '..', 'config', 'ur_primary_interface.yaml')
+TABLE_FILE = PackageFile('config/ur_primary_interface.yaml')
 
 
 def _source(source, element):
@@ -64,7 +63,7 @@ class StateLayout(object):
     """The robot state package of one generation and software version: `names` read, and their packing."""
 
     def __init__(self, generation, version, path=None):
-        with open(path or default_table_file()) as stream:
+        with open(path or TABLE_FILE.path()) as stream:
             table = yaml.safe_load(stream)
         self.names, self.packages = [], []
         for name in table['robot_state_order'][generation]:

@@ -14,12 +14,12 @@ after every control cycle with `read(rtde names) -> values` of that cycle,
 and each program goes to `run(text)`.
 """
 
-import os
 import socketserver
 import struct
 
 import yaml
 
+from ..sim_params import PackageFile
 from . import listen
 from .versions import available
 from .script_text import read_programs
@@ -29,15 +29,14 @@ PORT = 30003
 SEND_QUEUE = 500
 
 
-def default_layout_file():
-    return os.path.join(os.path.dirname(__file__), '..', '..', '..', '..', 'config', 'ur_realtime_interface.yaml')
+TABLE_FILE = PackageFile('config/ur_realtime_interface.yaml')
 
 
 class Layout(object):
     """The package of one software version: `names` (RTDE fields read each cycle) and how to pack them."""
 
     def __init__(self, generation, version, path=None):
-        with open(path or default_layout_file()) as stream:
+        with open(path or TABLE_FILE.path()) as stream:
             fields = [f for f in yaml.safe_load(stream)['fields'] if available(f, generation, version)]
         self.names = [f['rtde'] for f in fields if f['rtde'] is not None]
         # Where each value goes: ('read', index in names, count) or ('fixed', value, count).

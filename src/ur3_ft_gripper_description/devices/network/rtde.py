@@ -21,13 +21,13 @@ whose header or payload the protocol cannot read, or of an unknown type,
 gets one log line naming the client, and only that connection closes.
 """
 
-import os
 import socketserver
 import struct
 import threading
 
 import yaml
 
+from ..sim_params import PackageFile
 from . import listen
 from .versions import available
 
@@ -66,14 +66,13 @@ class ProtocolError(ValueError):
     """A package the protocol cannot read: the client's connection ends, with this one line."""
 
 
-def default_table_file():
-    return os.path.join(os.path.dirname(__file__), '..', '..', '..', '..', 'config', 'rtde_variables.yaml')
+TABLE_FILE = PackageFile('config/rtde_variables.yaml')
 
 
 def read_table(generation, version, path=None):
     """{'outputs': {name: type}, 'inputs': {name: type}}: the guide's fields a controller of `generation`
     ('cb3' or 'e_series') at software `version` (a tuple) has, register ranges expanded."""
-    with open(path or default_table_file()) as stream:
+    with open(path or TABLE_FILE.path()) as stream:
         data = yaml.safe_load(stream)
     table = {}
     for direction in ('outputs', 'inputs'):
@@ -166,22 +165,19 @@ class Exchange(object):
             recipe = session.outputs
             data = recipe.pack(read(recipe.names))
             # Protocol 1's data packages carry no recipe id: it has one output recipe and no ids.
-            session.send(packet(DATA_PACKAGE, data if session.protocol == 2 else data[1:]), data_package=True)
+            session.send(packet(DATA_PACKAGE, data if session.protocol == 2 else data[1:]))
 
 
 class Session(object):
-    """One client's protocol state; `receive(kind, payload)` answers through `send(bytes, data=False)`."""
+    """One client's protocol state; `receive(kind, payload)` answers, and data goes out, through `send(bytes)`."""
 
     def __init__(self, exchange, send, client):
-        self.exchange, self._send, self.client = exchange, send, client
+        self.exchange, self.send, self.client = exchange, send, client
         self.protocol = 1
         self.outputs = None          # Recipe
         self.inputs = {}             # recipe id -> Recipe
         self.every, self.cycles = 1, 0  # a data package every `every` cycles; cycles since the last
         self.started = False
-
-    def send(self, data, data_package=False):
-        self._send(data, data_package)
 
     def due(self):
         if not self.started:
@@ -283,7 +279,7 @@ def serve(address, exchange, log, port=PORT):
             client = '%s:%d' % self.client_address[:2]
             outbox = listen.Outbox(self.request, SEND_QUEUE, 'rtde: %s reads slower than the frequency it asked for: '
                                    'its connection is closed' % client, log)
-            session = exchange.session(lambda data, data_package: outbox.put(data), client)
+            session = exchange.session(outbox.put, client)
             try:
                 self._read(session, client)
             finally:

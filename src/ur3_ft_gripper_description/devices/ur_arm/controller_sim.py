@@ -35,8 +35,9 @@ class ControllerError(RuntimeError):
     """A controller that cannot start: one line naming the problem and the fix."""
 
 
-def build(ur_type, robot_ip, kinematics_params='', log=None):
-    """(core, faces) of `ur_type`, its faces listening on `robot_ip` (not yet serving)."""
+def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None):
+    """(core, faces, lock) of `ur_type`, its faces listening on `robot_ip` (not yet serving); `ports`:
+    {face: port} for those not on the robot's own (network_faces.PORTS; 0: a free one)."""
     import rospkg
     from ...model import description, export
     from ...model.names import DescriptionError
@@ -65,7 +66,7 @@ def build(ur_type, robot_ip, kinematics_params='', log=None):
             return method(*args)
 
     try:
-        faces = NetworkFaces(listen.checked_address(robot_ip), core, call, log or say)
+        faces = NetworkFaces(listen.checked_address(robot_ip), core, call, log or say, ports)
     except listen.ListenError as error:
         raise ControllerError(str(error)) from None
     return core, faces, lock
