@@ -16,6 +16,7 @@ import numpy as np
 
 from . import robot_state as rs
 from . import tool_motion as tm
+from ..wrench_model import STANDARD_GRAVITY as GRAVITY  # the twin's own, as its wrench model weighs
 from .registers import BOOLEAN, FLOAT, INTEGER
 
 # RTDE guide: robot_mode, safety_mode and runtime_state numbers (the same as ur_dashboard_msgs').
@@ -30,7 +31,6 @@ SAFETY_BIT = {rs.SAFETY_NORMAL: 0, rs.PROTECTIVE_STOP: 2}
 # analog_io_types: 1 = voltage, per pin (bits 0-1 standard inputs, 2-3 standard outputs); the ROS face
 # reports the inputs as voltages and the outputs as currents.
 ANALOG_IO_TYPES = 0b0011
-GRAVITY = 9.82  # m/s^2 as URScript's set_gravity default reads it
 
 # name: (value, why it is a constant)
 UNMODELLED = {
