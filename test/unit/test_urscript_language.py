@@ -489,3 +489,32 @@ def test_a_statement_continues_inside_brackets_and_a_block_can_share_its_line():
     assert robot.log == ['three'] and run.globals['n'] == 0
     # Lines keep their numbers past the continued ones: the index error is on line 8.
     assert (run.error.line, run.error.text) == (8, 'Index out of bounds: index 2, length 2')
+
+
+def test_a_statement_goes_on_after_an_operator_and_the_next_can_share_its_line():
+    # ur_rtde's control script, as every controller it runs on reads it: its register-offset injection leaves
+    # `global offset = # comment` with the value on the next line, and the next statement after that value.
+    text = ('global offset = # the register offset\n'
+            '1    global count = # the count\n'
+            '2    total = offset +\n'
+            '  count * 3 textmsg(total) textmsg("done")\n'
+            'x = total\n'
+            '(x)\n')
+    run, robot, _ = run_to_end(text)
+    assert run.error is None and robot.log == ['7', 'done'] and run.globals['x'] == 7
+
+
+def test_p_indexes_a_variable_named_p_where_its_brackets_hold_one_expression():
+    # ur_rtde's control script scales a pose argument named p element by element.
+    text = ('def scale(p, factor):\n  p[0] = p[0] * factor\n  return p\nend\n'
+            'q = scale(p[1, 2, 3, 0, 0, 0], 2)\ntextmsg(q[0])\ntextmsg(q[1])\n')
+    run, robot, _ = run_to_end(text)
+    assert run.error is None and [float(v) for v in robot.log] == [2.0, 2.0]
+
+
+def test_join_and_kill_of_a_handle_still_at_zero_do_nothing_and_of_another_number_are_type_errors():
+    # The drivers' programs set a thread handle to 0 before any run and kill it unconditionally.
+    run, robot, _ = run_to_end('global thrd = 0\nkill thrd\njoin thrd\ntextmsg("after")\n')
+    assert run.error is None and robot.log == ['after']
+    run, _, _ = run_to_end('kill 1\n')
+    assert run.error.text == 'Type error: kill takes a thread, not int'

@@ -369,6 +369,10 @@ class Run(object):
                 stack.append(ThreadHandle(started))
             elif op == C.JOIN or op == C.KILL:
                 handle = stack.pop()
+                if handle == 0 and not isinstance(handle, (bool, ThreadHandle)):
+                    # A handle variable still at the 0 the drivers' programs give it before any run
+                    # (ur_robot_driver's and ur_rtde's scripts kill such a thread unconditionally): no thread.
+                    continue
                 if not isinstance(handle, ThreadHandle):
                     raise RuntimeFault('Type error: %s takes a thread, not %s'
                                        % ('join' if op == C.JOIN else 'kill', values.type_name(handle)))

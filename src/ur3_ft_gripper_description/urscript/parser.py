@@ -2,7 +2,7 @@
 
 The grammar is the one home of the syntax; this module loads it (reading the
 file itself, so an installed package finds it beside this module), drops the
-newlines inside brackets, and turns lark's tree into `Node`s that carry their
+newlines that do not end a statement, and turns lark's tree into `Node`s that carry their
 line and column. Every lark option is given explicitly: the same code runs on
 lark-parser 0.8.1 (Ubuntu 20.04) and lark 1.1.x (22.04, 24.04, Debian 12).
 """
@@ -63,18 +63,75 @@ class Node(object):
         return 'Node(%s@%d:%d %r %r %r %r)' % (self.kind, self.line, self.column, self.a, self.b, self.c, self.d)
 
 
-class _BracketNewlines(object):
-    """Post-lexer: a newline inside (...) or [...] continues the expression; a program label stands alone.
+# Where a line ends with one of these, the statement goes on: the next line holds its operand.
+_OPERAND_EXPECTED = frozenset(['=', ',', '+', '-', '*', '/', '%', '==', '!=', '<=', '>=', '<', '>', 'and', 'or',
+                               'xor', 'not'])
+# A token that ends an operand, and one that begins a statement: two operands are never adjacent in an
+# expression, so the second begins the next statement, on the same line.
+_OPERAND_ENDS = frozenset(['NUMBER', 'STRING', 'NAME'])
+_CLOSERS = frozenset([')', ']', 'True', 'False'])
+_STATEMENT_KEYWORDS = frozenset(['global', 'local', 'return', 'break', 'continue', 'halt', 'join', 'kill', 'if',
+                                 'while', 'def', 'sec', 'thread', 'enter_critical', 'exit_critical'])
 
-    The manual: a label line has "$" as its first symbol; anywhere else the robot refuses it.
+
+def _ends_operand(token):
+    return token is not None and (token.type in _OPERAND_ENDS and token.value not in KEYWORDS
+                                  or token.value in _CLOSERS)
+
+
+def _begins_statement(token):
+    return token.type == 'NAME' and token.value not in KEYWORDS or token.value in _STATEMENT_KEYWORDS
+
+
+def _poses_or_indexes(tokens):
+    """`p[` opens a pose literal, unless its brackets hold one expression: then it indexes a variable named p
+    (ur_rtde's control script scales a pose argument `p` by `p[0] = p[0] * factor`), since a pose has six."""
+    tokens = iter(tokens)
+    for token in tokens:
+        if token.type != 'POSE_OPEN':
+            yield token
+            continue
+        inside, depth, commas = [], 1, 0
+        for inner in tokens:
+            if inner.value in ('(', '[', 'p['):
+                depth += 1
+            elif inner.value in (')', ']'):
+                depth -= 1
+            elif inner.value == ',' and depth == 1:
+                commas += 1
+            inside.append(inner)
+            if depth == 0:
+                break
+        if commas:
+            yield token
+        else:
+            yield lark.Token.new_borrow_pos('NAME', 'p', token)
+            yield lark.Token.new_borrow_pos('LSQB', '[', token)
+        for inner in _poses_or_indexes(inside):
+            yield inner
+
+
+class _Newlines(object):
+    """Post-lexer: where a newline ends a statement, as the controller's parser reads one.
+
+    - Inside (...) or [...], and after a token that needs an operand (`=`, `,`, an operator), a newline
+      continues the statement.
+    - Two statements may share a line: an operand followed by a name or a statement's keyword begins the
+      next one there.
+    Both are what ur_rtde's control script needs on every real controller: its register-offset injection
+    leaves `global reg_offset_float = # float register offset`, then `0    global reg_offset_int = ...`
+    on the next line.
+    - A program label stands alone: the manual's label line has "$" as its first symbol; anywhere else
+      the robot refuses it.
     """
 
-    always_accept = ('_NL', 'LABEL')  # the contextual lexer must still see them
+    always_accept = ()  # lark 1.x asks a post-lexer which terminals to keep; the grammar keeps its own
 
     def process(self, stream):
         depth = 0
         line_start = True
-        for token in stream:
+        previous = None  # the last token other than a newline
+        for token in _poses_or_indexes(stream):
             if token.type == 'LABEL':
                 if depth:
                     raise CompileError('a program label (%s) cannot stand inside brackets' % LABEL_EXAMPLE,
@@ -84,16 +141,25 @@ class _BracketNewlines(object):
                                        token.line, token.column)
             line_start = token.type == '_NL'
             if token.type == '_NL':
-                if depth:
+                if depth or previous is not None and previous.value in _OPERAND_EXPECTED:
                     continue
-            elif token.value in ('(', '[', 'p['):
+                previous = None
+                yield token
+                continue
+            if depth == 0 and _ends_operand(previous) and _begins_statement(token):
+                yield lark.Token.new_borrow_pos('_NL', '\n', token)
+            if token.value in ('(', '[', 'p['):
                 depth += 1
             elif token.value in (')', ']'):
                 depth = max(0, depth - 1)
+            previous = token
             yield token
 
 
 _PARSER = None
+# One lexer for the whole script, not lark's contextual one: that one refuses a token the parser cannot take
+# next before the post-lexer has ended the statement in front of it. Named 'standard' before lark 1.0.
+_BASIC_LEXER = 'basic' if int(lark.__version__.split('.')[0]) >= 1 else 'standard'
 
 
 def _parser():
@@ -101,9 +167,9 @@ def _parser():
     if _PARSER is None:
         with open(GRAMMAR_FILE) as f:
             grammar = f.read()
-        _PARSER = lark.Lark(grammar, parser='lalr', lexer='contextual', start='start',
+        _PARSER = lark.Lark(grammar, parser='lalr', lexer=_BASIC_LEXER, start='start',
                             propagate_positions=True, maybe_placeholders=False,
-                            keep_all_tokens=False, postlex=_BracketNewlines(), debug=False)
+                            keep_all_tokens=False, postlex=_Newlines(), debug=False)
     return _PARSER
 
 
