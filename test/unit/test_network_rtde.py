@@ -13,7 +13,7 @@ import pytest
 
 from ur3_ft_gripper_description.devices.network import rtde
 from ur3_ft_gripper_description.devices.ur_arm import rtde_fields
-from ur3_ft_gripper_description.devices.ur_arm.network_faces import TABLE_GENERATION
+from ur3_ft_gripper_description.devices.ur_arm.software import TABLE_KEYS
 from ur3_ft_gripper_description.number_text import number_list
 from ur3_ft_gripper_testing.rtde_client import RtdeClient
 from controller_cell import Cell, rtde_max_frequency
@@ -189,7 +189,7 @@ def test_every_output_field_of_the_guide_has_a_value_of_the_twin(generation, ver
 
 def test_each_generation_serves_the_fields_of_its_version(cell):
     version, generation = cell.core.software.version, cell.core.software.generation
-    fields = rtde.read_table(TABLE_GENERATION.get(generation, 'e_series'), version)['outputs']
+    fields = rtde.read_table(TABLE_KEYS[generation], version)['outputs']
     client = cell.client()
     newest_only = 'target_gravity'  # 5.26 on: the simulated e-Series runs older software
     assert newest_only not in fields

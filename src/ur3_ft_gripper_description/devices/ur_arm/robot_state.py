@@ -319,6 +319,10 @@ class RobotState(object):
         if key == 'shutdown':
             self.power_off_quietly()
             return 'Shutting down'
+        if key == 'get serial number':  # CB3 3.12 and e-Series 5.6 on
+            return self.software.serial_number
+        if key == 'get robot model':  # CB3 3.12 and e-Series 5.6 on
+            return self.software.model_name
         if key == 'polyscopeversion':
             return 'URSoftware %s' % self.software.version_text
         if words[:2] == ['load', 'installation']:

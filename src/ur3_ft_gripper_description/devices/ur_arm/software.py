@@ -12,6 +12,8 @@ import yaml
 from .. import sim_params
 
 CB3, E_SERIES = 'CB3', 'e-Series'
+# Each generation's key in the network interfaces' tables (config/rtde_variables.yaml and the others).
+TABLE_KEYS = {CB3: 'cb3', E_SERIES: 'e_series'}
 
 
 class UnknownModel(ValueError):
@@ -22,20 +24,29 @@ def default_table_file():
     return os.path.join(sim_params.package_path(), 'config', 'ur_software.yaml')
 
 
+def _read_entries(path=None):
+    with open(path or default_table_file()) as stream:
+        return yaml.safe_load(stream)
+
+
 def read_table(path=None):
     """{ur_type: (major, minor, bugfix, build)} of the table at `path` (default: the package's)."""
-    path = path or default_table_file()
-    with open(path) as stream:
-        data = yaml.safe_load(stream)
-    return {name: tuple(int(v) for v in entry['software_version']) for name, entry in data.items()}
+    return {name: tuple(int(v) for v in entry['software_version']) for name, entry in _read_entries(path).items()}
 
 
 class ControllerSoftware(object):
     """The software of one model's controller and what the simulated arm derives from it."""
 
-    def __init__(self, ur_type, version):
+    def __init__(self, ur_type, version, serial_number=''):
         self.ur_type = ur_type
         self.version = tuple(version)
+        self.serial_number = serial_number
+
+    @property
+    def model_name(self):
+        """The Dashboard Server's "get robot model" answer: UR and the payload class, without the e-Series' e
+        (UR3 ... UR30)."""
+        return 'UR' + ''.join(c for c in self.ur_type if c.isdigit())
 
     @property
     def generation(self):
@@ -44,6 +55,11 @@ class ControllerSoftware(object):
     @property
     def e_series(self):
         return self.generation == E_SERIES
+
+    @property
+    def table_key(self):
+        """The generation's key in the network interfaces' tables."""
+        return TABLE_KEYS[self.generation]
 
     @property
     def version_text(self):
@@ -63,11 +79,11 @@ class ControllerSoftware(object):
 
 def for_model(ur_type, path=None):
     """The ControllerSoftware of `ur_type`; UnknownModel (one line) if the table does not list it."""
-    table = read_table(path)
-    if ur_type not in table:
+    entries = _read_entries(path)
+    if ur_type not in entries:
         raise UnknownModel('%r is not a UR model the simulated arm knows; it knows %s (config/ur_software.yaml '
-                           'lists each with its controller software)' % (ur_type, ', '.join(sorted(table, key=_order))))
-    return ControllerSoftware(ur_type, table[ur_type])
+                           'lists each with its controller software)' % (ur_type, ', '.join(sorted(entries, key=_order))))
+    return ControllerSoftware(ur_type, read_table(path)[ur_type], str(entries[ur_type]['serial_number']))
 
 
 def _order(name):
