@@ -72,6 +72,9 @@ SET_MODE_TIMEOUT = 30.0
 ERROR, WARN, INFO = 'error', 'warn', 'info'
 PROGRAM_STARTED, PROGRAM_STOPPED, RUNTIME_EXCEPTION = 'PROGRAM_STARTED', 'PROGRAM_STOPPED', 'RUNTIME_EXCEPTION'
 PROGRAM_EVENTS = 100  # program events kept for the faces between two cycles
+# How far back (s) the controller's history of joints and wrench reaches (URScript's
+# get_actual_joint_positions_history, tool_contact). The manual gives no bound; a second is ours.
+HISTORY_SECONDS = 1.0
 
 # What became of a goal that ended: the controller, the goal id the request gave, its Outcome.
 Finished = collections.namedtuple('Finished', 'controller goal_id outcome')
@@ -196,6 +199,14 @@ class ArmCore(object):
         # What the last cycle commanded the joints (RTDE's target_q and target_qd).
         self.target_position, self.target_velocity = np.array(motion.position, dtype=float), np.zeros(6)
         self.wrench_model = tcp_wrench.TcpWrench()
+        # The last HISTORY_SECONDS of (joint positions, the TCP's wrench in base axes), one a cycle, newest
+        # first: what get_actual_joint_positions_history and tool_contact look back through.
+        self.history = collections.deque(
+            maxlen=int(round(HISTORY_SECONDS / script_robot.STEP_TIME[self.software.generation])))
+        # The controller's time (uptime) each RTDE input field was last written: rtde_set_watchdog's. The
+        # fields RTDE takes are its face's to say (network_faces.py); without it no client writes any.
+        self.rtde_input_times = {}
+        self.rtde_inputs = None
         # The controller_stopper acts on the first cycle too: a robot that starts without
         # its program running starts with the commanding controllers stopped.
         self.last_program_running = True
@@ -259,8 +270,12 @@ class ArmCore(object):
         if refusal is not None:
             self._say(ERROR, refusal)
             return False, refusal
-        self.wrench_model.zero(self.motion.flange_wrench, self._flange()[:3, :3], self.robot.payload)
+        self.zero_tcp_wrench()
         return True, ''
+
+    def zero_tcp_wrench(self):
+        """URScript's zero_ftsensor(), which both generations have (the driver's service is the e-Series' only)."""
+        self.wrench_model.zero(self.motion.flange_wrench, self._flange()[:3, :3], self.robot.payload)
 
     def dashboard(self, command):
         """The Dashboard Server's answer to one command line."""
@@ -584,6 +599,16 @@ class ArmCore(object):
         if not self.robot.moving_allowed:
             # Paused (or protectively stopped): the program waits where it is.
             return self._hold()
+        expired = self.script_robot.expired_watchdog()
+        if expired is not None:
+            action, text = expired
+            self.robot.add_log(text)
+            if action == script_robot.WATCHDOG_STOP:
+                self._stop_script(text)
+                return self._hold()
+            self._say(ERROR, 'script_command: %s; program paused' % text)
+            self.robot.program_state = rs.PAUSED
+            return self._hold()
         # The speed slider slows the program's time, its motions with it.
         dt = dt * self.robot.speed_slider
         self._step_run(run, dt)
@@ -678,7 +703,9 @@ class ArmCore(object):
         snapshot.reading = {name for name in READ_ONLY if name in self.manager.controllers and
                             self.manager.controllers[name].running}
         # The robot's own wrench, in tool0_controller (the TCP) as ur_robot_driver publishes it.
-        snapshot.wrench = tuple(self.tcp_force(flange_pose)[1])
+        in_base, in_tcp = self.tcp_force(flange_pose)
+        snapshot.wrench = tuple(in_tcp)
+        self.history.appendleft((snapshot.position, in_base))
         snapshot.digital_in, snapshot.digital_out = list(robot.digital_in), list(robot.digital_out)
         snapshot.analog_in, snapshot.analog_out = list(robot.analog_in), list(robot.analog_out)
         snapshot.tool_voltage = robot.tool_voltage

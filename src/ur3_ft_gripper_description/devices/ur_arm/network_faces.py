@@ -15,12 +15,10 @@ import threading
 from ..network import dashboard, listen, primary, realtime, rtde
 from . import rtde_fields
 from .script_robot import STEP_TIME
-from .software import CB3
 
 # The robot's port of each face, in the order they are served.
 PORTS = {'dashboard': dashboard.PORT, 'primary': primary.PORTS['primary'], 'secondary': primary.PORTS['secondary'],
          'realtime': realtime.PORT, 'rtde': rtde.PORT}
-TABLE_GENERATION = {CB3: 'cb3'}  # rtde_variables.yaml's key of each generation (default: e_series)
 
 
 class NetworkFaces(object):
@@ -29,10 +27,12 @@ class NetworkFaces(object):
     def __init__(self, address, core, call, log, ports=None):
         ports = dict(PORTS, **(ports or {}))
         software = core.software
-        generation = TABLE_GENERATION.get(software.generation, 'e_series')
+        generation = software.table_key
         self.core = core
         self.readers = {}
-        self.rtde = rtde.Exchange(rtde.read_table(generation, software.version), software.version,
+        table = rtde.read_table(generation, software.version)
+        core.rtde_inputs = frozenset(table['inputs'])
+        self.rtde = rtde.Exchange(table, software.version,
                                   1.0 / STEP_TIME[software.generation],
                                   lambda values: call(rtde_fields.apply_inputs, core, values), log)
         self.realtime = realtime.Realtime(realtime.Layout(generation, software.version))
@@ -62,9 +62,14 @@ class NetworkFaces(object):
         self.started = True
 
     def shutdown(self):
+        if self.started:
+            # Side by side: each server notices within its poll interval, so five take one interval, not five.
+            stoppers = [threading.Thread(target=server.shutdown) for server in self.servers]
+            for stopper in stoppers:
+                stopper.start()
+            for stopper in stoppers:
+                stopper.join()
         for server in self.servers:
-            if self.started:
-                server.shutdown()
             server.server_close()
 
     def after_cycle(self, dt, snapshot):

@@ -238,6 +238,8 @@ def _masked_pins(core, values, mask_name, value_name, offset, count):
 def apply_inputs(core, values):
     """One input data package, {field name: value}, applied to the robot at once, as the controller does."""
     registers = core.robot.registers
+    for name in values:
+        core.rtde_input_times[name] = core.uptime
     for name, value in values.items():
         for prefix, kind in (('input_bit_register_', BOOLEAN), ('input_int_register_', INTEGER),
                              ('input_double_register_', FLOAT)):

@@ -38,6 +38,7 @@ from ...urscript import Blocking, Pose, RuntimeFault
 from ...urscript.values import to_str
 from . import cartesian
 from . import force_mode as fm
+from . import robot_state as rs
 from . import script_sockets as ss
 from . import tool_motion as tm
 from .arm_kinematics import rigid_inverse
@@ -57,6 +58,14 @@ STEP_TIME = {CB3: 0.008, E_SERIES: 0.002}
 # set_gravity(d): the simulated arm stands on its base, and its payload compensation (tcp_wrench.py)
 # takes gravity along the base's -z; a d off the base's +z by more than this (rad) is refused.
 GRAVITY_ALONG_Z = 1e-3
+# tool_contact(direction): a force on the TCP against the direction (N) from which there is contact. The
+# robot detects contact from its joints' currents and UR gives no figure; the twin measures its TCP's wrench
+# (tcp_wrench.py; zero without physics), and 5 N stands clear of its noise at rest.
+TOOL_CONTACT_FORCE = 5.0
+# rtde_set_watchdog's actions, as the manual names them.
+WATCHDOG_IGNORE, WATCHDOG_PAUSE, WATCHDOG_STOP = 'ignore', 'pause', 'stop'
+# servoc's defaults (the manual's): tool acceleration (m/s^2), speed (m/s), blend radius (m).
+SERVOC_A, SERVOC_V = 1.2, 0.25
 # The general purpose registers' functions (registers.py): name -> (access, direction, kind).
 REGISTER_FUNCTIONS = {'%s_%s_%s_register' % (access, direction, kind): (access, direction, kind)
                       for access, direction in (('read', 'input'), ('read', 'output'), ('write', 'output'))
@@ -221,6 +230,20 @@ def _signatures(e_series, version):
         'socket_read_string': Signature(move, 'socket_name', 'prefix', 'suffix', 'interpret_escape', 'timeout',
                                         socket_name=ss.DEFAULT_SOCKET, prefix='', suffix='', interpret_escape=False,
                                         timeout=ss.READ_TIMEOUT),
+        'servoc': Signature(move, 'pose', 'a', 'v', 'r', a=SERVOC_A, v=SERVOC_V, r=0.0),
+        'tool_contact': Signature(now, 'direction'),
+        'get_actual_joint_positions_history': Signature(now, 'steps', steps=0),
+        'get_target_waypoint': Signature(now),
+        'get_joint_torques': Signature(now),
+        'get_target_payload': Signature(now),
+        'get_target_payload_cog': Signature(now),
+        'is_within_safety_limits': Signature(now, 'pose'),
+        'protective_stop': Signature(move),
+        'rtde_set_watchdog': Signature(now, 'variable_name', 'min_frequency', 'action', action=WATCHDOG_PAUSE),
+        'enable_external_ft_sensor': Signature(now, 'enable', 'sensor_mass', 'sensor_measuring_offset', 'sensor_cog',
+                                               sensor_mass=0.0, sensor_measuring_offset=[0.0, 0.0, 0.0],
+                                               sensor_cog=[0.0, 0.0, 0.0]),
+        'zero_ftsensor': Signature(now),
         'freedrive_mode': Signature(now),
         'end_freedrive_mode': Signature(now),
         'teach_mode': Signature(now),
@@ -231,9 +254,13 @@ def _signatures(e_series, version):
     for name, (access, _, _) in REGISTER_FUNCTIONS.items():
         functions[name] = Signature(now, 'address', 'value') if access == 'write' else Signature(now, 'address')
     if e_series:
-        # The e-Series' own: its flange sensor, and force mode's gain.
-        functions['zero_ftsensor'] = Signature(now)
+        # The e-Series' own: force mode's gain (a CB3 zeroes its TCP wrench too: ur_rtde's script for
+        # CB3 calls zero_ftsensor, and ur_rtde strips only what a CB3 lacks).
         functions['force_mode_set_gain_scaling'] = Signature(now, 'scaling')
+        functions['ft_rtde_input_enable'] = Signature(now, 'enable', 'sensor_mass', 'sensor_measuring_offset',
+                                                      'sensor_cog', sensor_mass=0.0,
+                                                      sensor_measuring_offset=[0.0, 0.0, 0.0],
+                                                      sensor_cog=[0.0, 0.0, 0.0])
         if tuple(version[:2]) >= (5, 10):
             functions['set_target_payload'] = Signature(now, 'mass', 'center_of_gravity', 'inertia',
                                                         'transition_time', inertia=None, transition_time=0.0)
@@ -281,6 +308,7 @@ class ScriptRobot(object):
         self.commanded = None         # the joints commanded last cycle
         self.commanded_speed = np.zeros(6)
         self.sockets = ss.ScriptSockets(lambda: core.uptime)
+        self.watchdogs = {}           # rtde_set_watchdog's: {variable: (period s, action, set at uptime)}
 
     def served(self):
         """{name: whether a call takes physical time}, for urscript.compile_script."""
@@ -291,6 +319,7 @@ class ScriptRobot(object):
     def start(self):
         """A program starts: it commands from where the joints are."""
         self.motion, self.force = None, None
+        self.watchdogs = {}
         self.force_offset = np.eye(4)
         self.commanded = self.core.actual_state()[0]
         self.planned = self.commanded.copy()
@@ -305,6 +334,7 @@ class ScriptRobot(object):
         close."""
         self._end_force_mode()
         self.sockets.close_all()
+        self.watchdogs = {}  # the manual: all watchdogs are removed on program stop
         if self.moving and isinstance(self.motion, (tm.ToolSpeed, tm.JointSpeed)) and \
                 not isinstance(self.motion, (tm.ToolStop, tm.JointStop)):
             self.motion = tm.JointStop(self.core.arm, self.planned, self.commanded_speed,
@@ -345,6 +375,18 @@ class ScriptRobot(object):
             self.commanded_speed = (target - self.commanded) / dt
         self.commanded = np.array(target, dtype=float)
         return self.commanded
+
+    def expired_watchdog(self):
+        """(action, text) of the first RTDE watchdog whose variable was not written within its period, once
+        (it is removed), or None."""
+        now = self.core.uptime
+        for name, (period, action, since) in sorted(self.watchdogs.items()):
+            if now - max(since, self.core.rtde_input_times.get(name, since)) > period:
+                del self.watchdogs[name]
+                if action != WATCHDOG_IGNORE:
+                    return action, ('RTDE input watchdog: %s was not written for %g s (min_frequency %g Hz)'
+                                    % (name, period, 1.0 / period))
+        return None
 
     def _displaced_pose(self, planned=None):
         """The TCP's pose the program plans (`planned`, where the caller has it), displaced by force mode
@@ -423,6 +465,10 @@ class ScriptRobot(object):
         target = self._cartesian_target(pose, 'movel')
         return self._motion(lambda: tm.LinearMove(self.core.arm, self.core.tcp, *self._q_start(), target_pose=target,
                                                   a=a, v=v, t=t, r=r, previous=self._previous()))
+
+    def _servoc(self, pose, a, v, r):
+        # Servo in a circle-blended line in tool space: movel's straight line at tool speed v, blended by r.
+        return self._movel(pose, a, v, 0.0, r)
 
     def _movep(self, pose, a, v, r):
         target = self._cartesian_target(pose, 'movep')
@@ -542,7 +588,87 @@ class ScriptRobot(object):
     def _is_steady(self):
         return bool(not self.moving and np.all(np.abs(self.core.actual_state()[1]) < STEADY_SPEED))
 
+    def _get_actual_joint_positions_history(self, steps):
+        history = self.core.history
+        if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps < len(history):
+            raise RuntimeFault('get_actual_joint_positions_history: steps must be an integer from 0 to %d (the '
+                               'history the simulated robot keeps), not %s' % (history.maxlen - 1, to_str(steps)))
+        return [float(v) for v in history[steps][0]]
+
+    def _get_target_waypoint(self):
+        if self.moving and isinstance(self.motion, tm.PathMotion):
+            return _pose(self.motion.end_pose)
+        return self._get_target_tcp_pose()
+
+    def _get_joint_torques(self):
+        # The torques the external wrench at the TCP puts on the joints: what the robot's are beyond those of
+        # moving itself (the manual), J^T F.
+        jacobian = self.core.arm.jacobian(self.core.actual_state()[0], self.core.tcp)
+        return [float(v) for v in jacobian.T.dot(self.core.tcp_force()[0])]
+
+    def _tool_contact(self, direction):
+        along = _floats(direction, 6, 'tool_contact: direction')[:3]
+        length = float(np.linalg.norm(along))
+        if length == 0.0:
+            return 0  # no direction of motion: nothing to meet
+        against = -along / length
+        steps = 0
+        for _, wrench in self.core.history:
+            if wrench[:3].dot(against) < TOOL_CONTACT_FORCE:
+                break
+            steps += 1
+        return steps
+
+    def _is_within_safety_limits(self, pose):
+        arm = self.core.arm
+        if isinstance(pose, Pose):
+            flange = _matrix(pose, 'is_within_safety_limits').dot(rigid_inverse(self.core.tcp))
+            return arm.nearest_inverse(flange, self.core.actual_state()[0]) is not None
+        q = _floats(pose, 6, 'is_within_safety_limits')
+        return bool(np.all(q >= arm.lower) and np.all(q <= arm.upper))
+
+    def _protective_stop(self):
+        # The program waits where it called it, and goes on from there once the stop is unlocked and played.
+        robot = self.core.robot
+        robot.protective_stop('the program called protective_stop()')
+        return Blocking(lambda: robot.safety_mode != rs.PROTECTIVE_STOP)
+
+    def _rtde_set_watchdog(self, variable_name, min_frequency, action):
+        name = _text(variable_name, 'rtde_set_watchdog: variable_name')
+        inputs = self.core.rtde_inputs
+        if inputs is not None and name not in inputs:
+            raise RuntimeFault('rtde_set_watchdog: %s is not an RTDE input of this controller' % name)
+        if isinstance(min_frequency, bool) or not isinstance(min_frequency, (int, float)) or not min_frequency > 0:
+            raise RuntimeFault('rtde_set_watchdog: min_frequency must be a number above 0 Hz, not %s'
+                               % to_str(min_frequency))
+        if action not in OneOf(WATCHDOG_IGNORE, WATCHDOG_PAUSE, WATCHDOG_STOP):
+            raise RuntimeFault('rtde_set_watchdog: action must be "ignore", "pause" or "stop", not %s'
+                               % to_str(action))
+        self.watchdogs[name] = (1.0 / min_frequency, action, self.core.uptime)
+
+    def _external_ft(self, what, enable, sensor_mass, sensor_measuring_offset, sensor_cog):
+        _floats([sensor_mass], 1, '%s: sensor_mass' % what)
+        _floats(sensor_measuring_offset, 3, '%s: sensor_measuring_offset' % what)
+        _floats(sensor_cog, 3, '%s: sensor_cog' % what)
+        if enable is True:
+            raise RuntimeFault('%s: the simulated robot measures its own TCP wrench and takes no external F/T '
+                               'sensor\'s readings' % what)
+        if enable is not False:
+            raise RuntimeFault('%s: enable must be True or False, not %s' % (what, to_str(enable)))
+
+    def _enable_external_ft_sensor(self, enable, sensor_mass, sensor_measuring_offset, sensor_cog):
+        self._external_ft('enable_external_ft_sensor', enable, sensor_mass, sensor_measuring_offset, sensor_cog)
+
+    def _ft_rtde_input_enable(self, enable, sensor_mass, sensor_measuring_offset, sensor_cog):
+        self._external_ft('ft_rtde_input_enable', enable, sensor_mass, sensor_measuring_offset, sensor_cog)
+
     # set-up
+
+    def _get_target_payload(self):
+        return float(self.core.robot.payload[0])
+
+    def _get_target_payload_cog(self):
+        return [float(v) for v in self.core.robot.payload[1]]
 
     def _set_tcp(self, pose):
         self.core.tcp = _matrix(pose, 'set_tcp')
@@ -581,7 +707,7 @@ class ScriptRobot(object):
         return STEP_TIME[self.core.software.generation]
 
     def _zero_ftsensor(self):
-        self.core.zero_ftsensor()
+        self.core.zero_tcp_wrench()
 
     # IO
 
