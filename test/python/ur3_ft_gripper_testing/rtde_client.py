@@ -39,6 +39,7 @@ class Recipe(object):
 class RtdeClient(object):
     def __init__(self, port, address='127.0.0.1', timeout=10.0):
         self.socket = socket.create_connection((address, port), timeout=timeout)
+        self.socket.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # as ur_rtde's client sends
         self.stream = self.socket.makefile('rb')
         self.protocol = 1
         self.outputs = None

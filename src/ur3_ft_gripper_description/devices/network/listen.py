@@ -48,6 +48,13 @@ class ThreadingServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
         self.name, self.log = name, log
         super().__init__(server_address, handler)
 
+    def get_request(self):
+        # Replies and packages go out as they are written, not held for the client's acknowledgement of the
+        # last (Nagle): a controller's small replies come within its cycle, not 40 ms later.
+        request, client_address = super().get_request()
+        request.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        return request, client_address
+
     def handle_error(self, request, client_address):
         error = sys.exc_info()[1]
         if isinstance(error, ConnectionError):
