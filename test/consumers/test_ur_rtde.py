@@ -2,12 +2,14 @@
 
 The simulated cell runs as users start it, `roslaunch ur3_ft_gripper_description
 ur_ft_gripper_bringup.launch sim:=true sim_robot_ip:=...`, on a loopback address
-of its own and a ROS master of its own. ur_rtde's receive, IO and dashboard clients connect as they do to a
-robot. What they read is checked against known truths: the start pose the
-launch gave, the TCP pose pinocchio computes for those joints from the exported
-model, the robot mode the dashboard asked for, the speed slider the IO client
-set. Times are the controller's own (RTDE's timestamp), not the wall clock's,
-except to wait for the node to come up.
+of its own and a ROS master of its own. ur_rtde's receive, IO, dashboard and control clients connect as they
+do to a robot; the control client sends the robot its own URScript program (ur_rtde's control script) over
+the primary interface and commands it through RTDE's registers. What they read is checked against known
+truths: the start pose the launch gave, the TCP pose pinocchio computes for those joints from the exported
+model, the robot mode the dashboard asked for, the speed slider the IO client set, the joints a movej was
+given and the least time its profile allows, a straight line for movel, the speed speedj asked for, a
+watchdog's period. Times are the controller's own (RTDE's timestamp), not the wall clock's, except to wait
+for the node to come up.
 """
 import math
 import os
@@ -19,6 +21,7 @@ import time
 import numpy as np
 import pinocchio
 import pytest
+import rtde_control
 import rtde_io
 import rtde_receive
 from dashboard_client import DashboardClient
@@ -32,6 +35,7 @@ COME_UP = 120.0  # wall s for roslaunch, a master and the node on a busy machine
 # The RTDE guide's robot modes and robot status bits.
 POWER_OFF, RUNNING = 3, 7
 POWER_ON_BIT = 1
+PLAYING = 2  # the RTDE guide's runtime_state
 
 
 def free_port():
@@ -138,3 +142,80 @@ def test_the_io_interface_sets_the_speed_slider_and_a_digital_output(robot_ip, r
         assert receive.getActualDigitalOutputBits() == 1 << 3
     finally:
         io.disconnect()
+
+
+@pytest.fixture(scope='module')
+def control(robot_ip, receive):
+    """ur_rtde's RTDEControlInterface, its control script running on the simulated robot (at full speed: the
+    IO test above leaves the speed slider lower)."""
+    io = rtde_io.RTDEIOInterface(robot_ip)
+    try:
+        assert io.setSpeedSlider(1.0)
+        controller_wait(receive, lambda: receive.getTargetSpeedFraction() == pytest.approx(1.0), 5.0)
+    finally:
+        io.disconnect()
+    client = rtde_control.RTDEControlInterface(robot_ip)
+    yield client
+    client.stopScript()
+    client.disconnect()
+
+
+def test_the_control_script_runs_and_movej_reaches_the_joints_no_sooner_than_its_profile(control, receive):
+    assert control.isProgramRunning()
+    target = list(START)
+    target[0] += 0.2
+    start = receive.getTimestamp()
+    assert control.moveJ(target, 1.0, 1.0)
+    # The receive client's connection may be a package or two behind the control client's, which saw it end.
+    controller_wait(receive, lambda: receive.getActualQ() == pytest.approx(target, abs=1e-6), 0.1)
+    # 0.2 rad at a = v = 1: the speed never reaches v, a triangle of 2 sqrt(0.2 / a) s. Later, not sooner,
+    # by the command's round trip through RTDE and the script.
+    assert receive.getTimestamp() - start >= 2 * math.sqrt(0.2) - 0.01
+
+
+def test_movel_keeps_the_tcp_on_a_straight_line(control, receive):
+    start = receive.getActualTCPPose()
+    target = list(start)
+    target[2] += 0.05
+    assert control.moveL(target, 0.25, 0.5, True)  # asynchronous: the path is sampled while it runs
+    samples = []
+    end = receive.getTimestamp() + 10.0
+    while control.getAsyncOperationProgress() >= 0 or not samples:
+        samples.append(receive.getActualTCPPose())
+        assert receive.getTimestamp() < end, 'movel did not end within 10 s of the controller\'s time'
+        time.sleep(0.002)
+    controller_wait(receive, lambda: receive.getActualTCPPose()[2] == pytest.approx(target[2], abs=1e-6), 2.0)
+    assert receive.getActualTCPPose() == pytest.approx(target, abs=1e-6)
+    assert len(samples) > 10
+    for pose in samples:
+        assert pose[:2] == pytest.approx(start[:2], abs=1e-6)  # on the vertical line through the start
+        assert start[2] - 1e-6 <= pose[2] <= target[2] + 1e-6
+        assert pose[3:] == pytest.approx(start[3:], abs=1e-6)  # the tool does not turn
+
+
+def test_inverse_kinematics_gives_the_joints_the_arm_has(control, receive):
+    assert control.getInverseKinematics(receive.getActualTCPPose()) == pytest.approx(receive.getActualQ(), abs=1e-6)
+    assert control.isJointsWithinSafetyLimits(receive.getActualQ())
+    assert not control.isJointsWithinSafetyLimits([7.0, 0.0, 0.0, 0.0, 0.0, 0.0])  # beyond +-2 pi
+    assert not control.isPoseWithinSafetyLimits([3.0, 0.0, 0.0, 0.0, math.pi, 0.0])  # 3 m away: out of reach
+
+
+def test_speedj_reaches_the_speed_asked_and_speedstop_stops(control, receive):
+    assert control.speedJ([0.2, 0.0, 0.0, 0.0, 0.0, 0.0], 1.0, 0.0)
+    controller_wait(receive, lambda: receive.getActualQd()[0] == pytest.approx(0.2, abs=1e-9), 2.0)
+    assert receive.getActualQd()[1:] == pytest.approx([0.0] * 5, abs=1e-9)
+    assert control.speedStop(2.0)
+    controller_wait(receive, lambda: receive.getActualQd() == pytest.approx([0.0] * 6, abs=1e-9), 2.0)
+
+
+def test_the_watchdog_stops_the_program_one_period_after_the_last_kick(control, receive):
+    assert control.setWatchdog(10.0)  # Hz: the program stops 0.1 s of the controller's time after a silence
+    for _ in range(20):
+        assert control.kickWatchdog()
+        time.sleep(0.02)
+    assert control.isProgramRunning()
+    assert control.kickWatchdog()
+    silent_from = receive.getTimestamp()  # at the last kick or before it: RTDE's data lags its inputs
+    # Read on the receive client's own connection, the stop and its time come in one package.
+    controller_wait(receive, lambda: receive.getRuntimeState() != PLAYING, 5.0)
+    assert receive.getTimestamp() - silent_from >= 0.1 - 0.01
