@@ -11,6 +11,8 @@ import time
 
 import pytest
 
+from ur3_ft_gripper_description.devices import sim_params
+
 from test_ur_arm_core import make_core
 
 TAKE_IN = 30.0  # wall s for the peer's thread to accept and read
@@ -141,3 +143,32 @@ def test_bad_arguments_stop_the_program_naming_them(arm):
         level, text = arm.take_messages()[-1]
         assert level == 'error' and problem in text, text
     assert not math.isnan(arm.uptime)
+
+
+OUTSIDE = 'def out():\n  textmsg(socket_open("192.0.2.7", 30002))\nend\n'  # TEST-NET-1: no such host anywhere
+
+
+def test_an_address_beyond_loopback_is_the_robots_runtime_error_naming_it(arm):
+    arm.script_command(OUTSIDE)
+    for _ in range(3):
+        arm.step(0.002)
+    level, text = arm.take_messages()[-1]
+    assert level == 'error' and text == (
+        'script_command: RuntimeException: Runtime error in line 2, column 11 Error: socket_open: 192.0.2.7 is beyond '
+        'this machine; the simulated robot connects to loopback and to the addresses you allow it '
+        '(script_socket_hosts:=192.0.2.7); program stopped')
+    assert not arm.script_running
+
+
+def test_a_network_the_user_allows_is_tried_as_the_robot_tries_it(configured_model):
+    arm = make_core(configured_model, **{'~script_socket_hosts': '10.1.2.3, 192.0.2.0/24'})
+    log = run_program(arm, OUTSIDE, seconds=5.0)
+    assert log == ['False']  # allowed, and nobody answers there within socket_open's 2 s
+
+
+@pytest.mark.parametrize('value', ['192.0.2.0/33', 'robot.local', '::1'])
+def test_a_bad_allowance_is_one_line_naming_it(configured_model, value):
+    with pytest.raises(sim_params.ParamError) as caught:
+        make_core(configured_model, **{'~script_socket_hosts': value})
+    assert str(caught.value).startswith('~script_socket_hosts=%s: %r is not an IPv4 address or network' % (value, value))
+    assert '\n' not in str(caught.value)

@@ -35,9 +35,10 @@ class ControllerError(RuntimeError):
     """A controller that cannot start: one line naming the problem and the fix."""
 
 
-def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None):
+def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None, script_socket_hosts=''):
     """(core, faces, lock) of `ur_type`, its faces listening on `robot_ip` (not yet serving); `ports`:
-    {face: port} for those not on the robot's own (network_faces.PORTS; 0: a free one)."""
+    {face: port} for those not on the robot's own (network_faces.PORTS; 0: a free one); `script_socket_hosts`:
+    where programs' sockets may reach beyond loopback (settings.socket_hosts)."""
     import rospkg
     from ...model import description, export
     from ...model.names import DescriptionError
@@ -54,7 +55,8 @@ def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None):
         config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config',
                               '%s_controllers.yaml' % ur_type)
         values = {'~ur_type': ur_type, '~controller_config_file': config, 'robot_description': urdf,
-                  '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller'}
+                  '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller',
+                  '~script_socket_hosts': script_socket_hosts}
         settings = read_settings(lambda name, default=None: values.get(name, default))
     except (software.UnknownModel, DescriptionError, sim_params.ParamError) as error:
         raise ControllerError(str(error)) from None
@@ -103,6 +105,9 @@ def main(argv=None):
                              'only; 127.0.0.2 for a second controller)' % listen.LOOPBACK)
     parser.add_argument('--kinematics-params', default='',
                         help='a calibration YAML (ur_calibration\'s output) instead of ur_description\'s default')
+    parser.add_argument('--script-socket-hosts', default='',
+                        help='addresses beyond loopback that URScript\'s socket_open may connect to: IPv4 addresses or '
+                             'networks (192.168.56.1, 192.168.56.0/24) separated by commas (default: loopback only)')
     # roslaunch appends its own name:=value arguments (__name, __log) to any program it starts.
     args = parser.parse_args([a for a in (sys.argv[1:] if argv is None else argv) if ':=' not in a])
     if args.kinematics_params and not os.path.isfile(args.kinematics_params):
@@ -110,7 +115,8 @@ def main(argv=None):
             'output), or leave it out for ur_description\'s default' % args.kinematics_params)
         return 1
     try:
-        core, faces, lock = build(args.ur_type, args.robot_ip, args.kinematics_params)
+        core, faces, lock = build(args.ur_type, args.robot_ip, args.kinematics_params,
+                                  script_socket_hosts=args.script_socket_hosts)
     except ControllerError as error:
         say(str(error))
         return 1

@@ -190,6 +190,7 @@ class ArmCore(object):
         self.group_velocity = np.zeros(6)
         self.twist = np.zeros(6)
         self.twist_follower = cartesian.TwistFollower(self.arm)
+        self.socket_hosts = settings.script_socket_hosts  # where a program's sockets may reach beyond loopback
         self.script_robot = script_robot.ScriptRobot(self)
         self.script_run = None       # urscript.Run of the primary program from script_command
         self.secondary_runs = []     # urscript.Run of the secondary programs running beside it

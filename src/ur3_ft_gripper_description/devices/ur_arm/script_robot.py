@@ -307,7 +307,7 @@ class ScriptRobot(object):
         self.force_offset = np.eye(4)  # force mode's displacement of the TCP (base axes, about the TCP)
         self.commanded = None         # the joints commanded last cycle
         self.commanded_speed = np.zeros(6)
-        self.sockets = ss.ScriptSockets(lambda: core.uptime)
+        self.sockets = ss.ScriptSockets(lambda: core.uptime, core.socket_hosts)
         self.watchdogs = {}           # rtde_set_watchdog's: {variable: (period s, action, set at uptime)}
 
     def served(self):

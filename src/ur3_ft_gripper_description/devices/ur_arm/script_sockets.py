@@ -13,6 +13,7 @@ time, as everything the program does: a cell running faster than real time
 """
 
 import errno
+import ipaddress
 import math
 import socket
 import struct
@@ -48,11 +49,24 @@ class _Connection(object):
 
 
 class ScriptSockets(object):
-    """The robot's named sockets; `clock()` is the controller's time (s)."""
+    """The robot's named sockets; `clock()` is the controller's time (s). A program reaches this machine's
+    loopback, and beyond it only the IPv4 networks in `allowed` (the user's script_socket_hosts): a program
+    sent to the simulated robot does not open connections into the user's network unasked."""
 
-    def __init__(self, clock):
+    def __init__(self, clock, allowed=()):
         self.clock = clock
+        self.allowed = list(allowed)
         self.connections = {}
+
+    def _check_reach(self, address):
+        """RuntimeFault, naming the address, where the program may not connect; else nothing."""
+        try:
+            host = ipaddress.ip_address(socket.gethostbyname(str(address)))
+        except (OSError, UnicodeError, ValueError):
+            return  # a name that does not resolve fails to connect, as on the robot
+        if not host.is_loopback and not any(host in network for network in self.allowed):
+            raise RuntimeFault('socket_open: %s is beyond this machine; the simulated robot connects to loopback '
+                               'and to the addresses you allow it (script_socket_hosts:=%s)' % (address, host))
 
     def close_all(self):
         for name in list(self.connections):
@@ -86,6 +100,7 @@ class ScriptSockets(object):
 
     def open(self, address, port, name=DEFAULT_SOCKET):
         """socket_open: True once connected, False if refused or not within OPEN_TIMEOUT."""
+        self._check_reach(address)
         self.close(name)
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setblocking(False)

@@ -8,7 +8,9 @@ tests); no ROS needed. What a user can get wrong is one ParamError line
 naming the parameter and what it must be.
 """
 
+import ipaddress
 import math
+import re
 
 import numpy as np
 
@@ -38,6 +40,23 @@ def selectable_mode(name, value):
 def words(name, value):
     """Names separated by spaces; empty: none."""
     return str(value).split() if value else []
+
+
+def socket_hosts(name, value):
+    """IPv4 addresses or networks, separated by commas or spaces; empty: none."""
+    hosts = []
+    for word in re.split(r'[,\s]+', str(value or '').strip()):
+        if not word:
+            continue
+        try:
+            network = ipaddress.ip_network(word, strict=False)
+        except ValueError:
+            network = None
+        if network is None or network.version != 4:
+            raise sim_params.ParamError('%s=%s: %r is not an IPv4 address or network; give addresses or networks such '
+                                        'as 192.168.56.1 or 192.168.56.0/24, separated by commas' % (name, value, word))
+        hosts.append(network)
+    return hosts
 
 
 def robot_ip(name, value):
@@ -78,6 +97,9 @@ PARAMETERS = (
     sim_params.Param('~robot_ip', '', "The controller's own network interfaces (the Dashboard Server on 29999, primary and secondary 30001-30002, real-time 30003, RTDE 30004) "
                      'listen on this IPv4 address, e.g. 127.0.0.1, or 127.0.0.2 for a second cell on the machine; '
                      'empty: none', robot_ip),
+    sim_params.Param('~script_socket_hosts', '', "Addresses beyond this machine's loopback that URScript's "
+                     'socket_open may connect to: IPv4 addresses or networks (192.168.56.1, 192.168.56.0/24) separated '
+                     'by commas; empty: loopback only', socket_hosts),
 ) + arm_cell.PARAMETERS + sim_clock.PARAMETERS
 
 
@@ -140,4 +162,5 @@ def read_settings(get_param):
     # The installation's payload: what the model mounts on the flange, as a user enters it on the teach pendant.
     settings.robot.payload = mounted_payload(description, settings.prefix + FLANGE)
     settings.robot_ip = param('~robot_ip')
+    settings.script_socket_hosts = param('~script_socket_hosts')
     return settings
