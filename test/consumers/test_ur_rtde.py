@@ -7,8 +7,8 @@ do to a robot; the control client sends the robot its own URScript program (ur_r
 the primary interface and commands it through RTDE's registers. What they read is checked against known
 truths: the start pose the launch gave, the TCP pose pinocchio computes for those joints from the exported
 model, the robot mode the dashboard asked for, the speed slider the IO client set, the joints a movej was
-given and the least time its profile allows, a straight line for movel, the speed speedj asked for, a
-watchdog's period. Times are the controller's own (RTDE's timestamp), not the wall clock's, except to wait
+given and the least time its profile allows, a straight line for movel, the speeds speedj and speedl asked
+for, the last target of a servoj stream, a watchdog's period. Times are the controller's own (RTDE's timestamp), not the wall clock's, except to wait
 for the node to come up.
 """
 import math
@@ -49,15 +49,15 @@ def ur_type(request):
     return request.param
 
 
-@pytest.fixture(scope='module')
-def robot_ip(ur_type):
-    """The address of a simulated cell of `ur_type` started for these tests (a loopback address of its own)."""
+def bring_up(ur_type, *arguments):
+    """The address of a simulated cell of `ur_type` started for these tests (a loopback address of its own, a
+    master of its own), with the bring-up's `arguments`; the bring-up ends with the generator."""
     address = '127.0.%d.%d' % (random.randint(1, 254), random.randint(2, 254))
     master = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % master)
     node = subprocess.Popen(['roslaunch', '-p', str(master), 'ur3_ft_gripper_description',
                              'ur_ft_gripper_bringup.launch', 'ur_type:=' + ur_type, 'sim:=true',
-                             'sim_robot_ip:=' + address],
+                             'sim_robot_ip:=' + address] + list(arguments),
                             env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
     try:
         deadline = time.monotonic() + COME_UP
@@ -66,13 +66,19 @@ def robot_ip(ur_type):
                 socket.create_connection((address, 30004), timeout=1.0).close()
                 break
             except OSError:
-                assert node.poll() is None, 'sim_arm.launch ended: %s' % node.stdout.read()
+                assert node.poll() is None, 'the bring-up ended: %s' % node.stdout.read()
                 assert time.monotonic() < deadline, 'the simulated arm did not listen within %g s' % COME_UP
                 time.sleep(0.2)
         yield address
     finally:
         node.terminate()
         node.wait(timeout=60)
+
+
+@pytest.fixture(scope='module')
+def robot_ip(ur_type):
+    """A kinematic cell."""
+    yield from bring_up(ur_type)
 
 
 def controller_wait(receive, condition, seconds):
@@ -208,6 +214,35 @@ def test_speedj_reaches_the_speed_asked_and_speedstop_stops(control, receive):
     controller_wait(receive, lambda: receive.getActualQd() == pytest.approx([0.0] * 6, abs=1e-9), 2.0)
 
 
+
+def test_speedl_moves_the_tool_at_the_speed_asked_and_speedstop_stops(control, receive):
+    assert control.speedL([0.0, 0.0, 0.02, 0.0, 0.0, 0.0], 0.5, 0.0)  # 2 cm/s up, the tool not turning
+    # Within 0.1 mm/s: RTDE's TCP speed is the joints' speeds over a cycle through the Jacobian at its end.
+    controller_wait(receive, lambda: receive.getActualTCPSpeed()[2] == pytest.approx(0.02, abs=1e-4), 2.0)
+    assert receive.getActualTCPSpeed() == pytest.approx([0.0, 0.0, 0.02, 0.0, 0.0, 0.0], abs=1e-4)
+    assert control.speedStop(2.0)
+    controller_wait(receive, lambda: receive.getActualTCPSpeed() == pytest.approx([0.0] * 6, abs=1e-9), 2.0)
+
+
+def test_servoj_streamed_at_500_hz_is_followed_to_its_last_target(control, receive):
+    q = receive.getActualQ()
+    for _ in range(250):  # half a second of the client's clock, a target every 2 ms (0.2 rad/s on the wrist)
+        period = control.initPeriod()
+        q[5] += 0.0004
+        assert control.servoJ(q, 0.5, 0.5, 0.002, 0.1, 300)
+        control.waitPeriod(period)
+    # The servo holds the last target until servoStop: the wrist gets there.
+    controller_wait(receive, lambda: receive.getActualQ() == pytest.approx(q, abs=1e-4), 2.0)
+    assert control.servoStop(10.0)
+
+
+def test_stopscript_ends_the_program_and_reuploadscript_runs_it_again(control, receive):
+    control.stopScript()
+    controller_wait(receive, lambda: receive.getRuntimeState() != PLAYING, 2.0)
+    assert control.reuploadScript()
+    controller_wait(receive, lambda: receive.getRuntimeState() == PLAYING, 5.0)
+    assert control.isProgramRunning()
+
 def test_the_watchdog_stops_the_program_one_period_after_the_last_kick(control, receive):
     assert control.setWatchdog(10.0)  # Hz: the program stops 0.1 s of the controller's time after a silence
     for _ in range(20):
@@ -219,3 +254,61 @@ def test_the_watchdog_stops_the_program_one_period_after_the_last_kick(control, 
     # Read on the receive client's own connection, the stop and its time come in one package.
     controller_wait(receive, lambda: receive.getRuntimeState() != PLAYING, 5.0)
     assert receive.getTimestamp() - silent_from >= 0.1 - 0.01
+
+
+
+# -- on physics -------------------------------------------------------------------------------------------
+
+# Where the gripper's TCP starts, in base_link (m): over the default world's free table (its top at z = 0),
+# where examples/force_mode_press.py presses. The controller's base is base_link turned half a turn about z.
+PRESS_XY, PRESS_HEIGHT = (0.2986, 0.1123), 0.06
+PRESS_FORCES = (10.0, 20.0, 40.0)
+SETTLE, MEASURE = 2.5, 1.0  # s of the controller's time: pressing before the force is read, and reading
+
+
+@pytest.fixture(scope='module')
+def physics_ip(ur_type):
+    """A physics cell, on its simulated clock at real time (ur_rtde keeps the wall clock's time)."""
+    yield from bring_up(ur_type, 'physics:=true')
+
+
+def gripper_tcp(ur_type):
+    """The gripper's TCP in tool0 (x, y, z, rotation vector), from the exported model by pinocchio."""
+    model = pinocchio.buildModelFromUrdf(exported_urdf('--ur-type', ur_type), mimic=True)
+    data = model.createData()
+    pinocchio.framesForwardKinematics(model, data, pinocchio.neutral(model))
+    offset = data.oMf[model.getFrameId('tool0')].actInv(data.oMf[model.getFrameId('gripper_tcp')])
+    return list(offset.translation) + list(pinocchio.log3(offset.rotation))
+
+
+def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_ip):
+    receive = rtde_receive.RTDEReceiveInterface(physics_ip)
+    control = rtde_control.RTDEControlInterface(physics_ip)
+    try:
+        assert control.setTcp(gripper_tcp(ur_type))
+        # The gripper pointing down (its TCP's z along the base's -z) over the table.
+        above = [-PRESS_XY[0], -PRESS_XY[1], PRESS_HEIGHT, 0.0, math.pi, 0.0]
+        assert control.moveJ_IK(above, 1.0, 1.0)
+        seen = []
+        for force in PRESS_FORCES:
+            assert control.zeroFtSensor()
+            frame = receive.getActualTCPPose()
+            started, readings = receive.getTimestamp(), []
+            while receive.getTimestamp() < started + SETTLE + MEASURE:
+                period = control.initPeriod()
+                # The tool's z, down: the force the robot applies to the table, at most 5 cm/s along it.
+                assert control.forceMode(frame, [0, 0, 1, 0, 0, 0], [0.0, 0.0, force, 0.0, 0.0, 0.0], 2,
+                                         [0.1, 0.1, 0.05, 0.17, 0.17, 0.17])
+                if receive.getTimestamp() >= started + SETTLE:
+                    readings.append(receive.getActualTCPForce())
+                control.waitPeriod(period)
+            assert control.forceModeStop()
+            mean = np.mean(readings, axis=0)
+            seen.append('%g N: robot wrench %s' % (force, np.round(mean, 2)))
+            # The table pushes the tool up with the force the robot applies down.
+            assert mean[2] == pytest.approx(force, abs=max(0.05 * force, 0.5)), seen
+            assert control.moveJ_IK(above, 1.0, 1.0)
+    finally:
+        control.stopScript()
+        control.disconnect()
+        receive.disconnect()
