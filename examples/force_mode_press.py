@@ -26,8 +26,11 @@ from ur3_ft_gripper_description import clients
 START_HEIGHT = 0.06
 CLEAR_HEIGHT = 0.16
 START_XY = (0.2986, 0.1123)
-SETTLE = 2.5   # s of pressing before the force is read
+SETTLE = 3.0   # s of pressing before the force is read
 MEASURE = 1.0  # s over which it is averaged
+# s the program keeps pressing after the reading: this node sees the program start, and counts its time,
+# a little late on a busy machine, and the reading must end before the tool lifts.
+HOLD_AFTER = 2.0
 
 PROGRAM = """def force_mode_press():
   force_mode(get_actual_tcp_pose(), [0, 0, 1, 0, 0, 0], [0, 0, {force}, 0, 0, 0], 2, [0.1, 0.1, {speed}, 0.17, 0.17, 0.17])
@@ -58,7 +61,7 @@ class ForceModePress(object):
         `sample()`, if given, is called every 20 ms over the second the readings are averaged; its
         results come back as result['samples'] (a test reads the simulation's own contact force so).
         """
-        self.script.run(PROGRAM.format(force=force, speed=speed, seconds=seconds + 1.0))
+        self.script.run(PROGRAM.format(force=force, speed=speed, seconds=seconds + HOLD_AFTER))
         self.rospy.sleep(seconds - MEASURE)
         start = self.rospy.get_time()
         samples = []

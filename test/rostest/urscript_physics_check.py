@@ -67,7 +67,8 @@ class UrscriptPhysicsTest(unittest.TestCase):
             # The example's own press; MuJoCo's contact over the same second as its readings: the mean
             # force from the impulse between the first and last samples (the force itself changes from
             # one timestep to the next: at 10 N its standard deviation is 1.8 N).
-            result = self.press.press(force, 0.05, 3.5, sample=self.contact_impulse)
+            result = self.press.press(force, 0.05, force_mode_press.SETTLE + force_mode_press.MEASURE,
+                                      sample=self.contact_impulse)
             ft300, robot = result['ft300'], result['robot']
             (began, first), (ended, last) = result['samples'][0], result['samples'][-1]
             contact = (last - first) / (ended - began)
