@@ -603,12 +603,12 @@ class ArmCore(object):
         expired = self.script_robot.expired_watchdog()
         if expired is not None:
             action, text = expired
-            self.robot.add_log(text)
             if action == script_robot.WATCHDOG_STOP:
+                self.robot.add_log(text)
                 self._stop_script(text)
-                return self._hold()
-            self._say(ERROR, 'script_command: %s; program paused' % text)
-            self.robot.program_state = rs.PAUSED
+            else:
+                self.robot.pause_program(text)
+                self._say(ERROR, 'script_command: %s; program paused' % text)
             return self._hold()
         # The speed slider slows the program's time, its motions with it.
         dt = dt * self.robot.speed_slider

@@ -172,6 +172,12 @@ class RobotState(object):
             self.program_state = PAUSED
         self.add_log('Protective stop: %s' % reason)
 
+    def pause_program(self, reason):
+        """The controller paused the running program itself (an RTDE watchdog): in the robot's log."""
+        self.add_log(reason)
+        if self.program_state == PLAYING:
+            self.program_state = PAUSED
+
     # -- what ROS-side services do directly -----------------------------------
 
     def set_speed_slider(self, fraction):

@@ -64,6 +64,9 @@ GRAVITY_ALONG_Z = 1e-3
 TOOL_CONTACT_FORCE = 5.0
 # rtde_set_watchdog's actions, as the manual names them.
 WATCHDOG_IGNORE, WATCHDOG_PAUSE, WATCHDOG_STOP = 'ignore', 'pause', 'stop'
+# The external F/T sensor's switches (enable_external_ft_sensor, ft_rtde_input_enable): the manual's parameters.
+EXTERNAL_FT = ('enable', 'sensor_mass', 'sensor_measuring_offset', 'sensor_cog')
+EXTERNAL_FT_DEFAULTS = {'sensor_mass': 0.0, 'sensor_measuring_offset': [0.0, 0.0, 0.0], 'sensor_cog': [0.0, 0.0, 0.0]}
 # servoc's defaults (the manual's): tool acceleration (m/s^2), speed (m/s), blend radius (m).
 SERVOC_A, SERVOC_V = 1.2, 0.25
 # The general purpose registers' functions (registers.py): name -> (access, direction, kind).
@@ -240,9 +243,7 @@ def _signatures(e_series, version):
         'is_within_safety_limits': Signature(now, 'pose'),
         'protective_stop': Signature(move),
         'rtde_set_watchdog': Signature(now, 'variable_name', 'min_frequency', 'action', action=WATCHDOG_PAUSE),
-        'enable_external_ft_sensor': Signature(now, 'enable', 'sensor_mass', 'sensor_measuring_offset', 'sensor_cog',
-                                               sensor_mass=0.0, sensor_measuring_offset=[0.0, 0.0, 0.0],
-                                               sensor_cog=[0.0, 0.0, 0.0]),
+        'enable_external_ft_sensor': Signature(now, *EXTERNAL_FT, **EXTERNAL_FT_DEFAULTS),
         'zero_ftsensor': Signature(now),
         'freedrive_mode': Signature(now),
         'end_freedrive_mode': Signature(now),
@@ -257,10 +258,7 @@ def _signatures(e_series, version):
         # The e-Series' own: force mode's gain (a CB3 zeroes its TCP wrench too: ur_rtde's script for
         # CB3 calls zero_ftsensor, and ur_rtde strips only what a CB3 lacks).
         functions['force_mode_set_gain_scaling'] = Signature(now, 'scaling')
-        functions['ft_rtde_input_enable'] = Signature(now, 'enable', 'sensor_mass', 'sensor_measuring_offset',
-                                                      'sensor_cog', sensor_mass=0.0,
-                                                      sensor_measuring_offset=[0.0, 0.0, 0.0],
-                                                      sensor_cog=[0.0, 0.0, 0.0])
+        functions['ft_rtde_input_enable'] = Signature(now, *EXTERNAL_FT, **EXTERNAL_FT_DEFAULTS)
         if tuple(version[:2]) >= (5, 10):
             functions['set_target_payload'] = Signature(now, 'mass', 'center_of_gravity', 'inertia',
                                                         'transition_time', inertia=None, transition_time=0.0)

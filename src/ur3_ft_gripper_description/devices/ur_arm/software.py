@@ -29,9 +29,13 @@ def _read_entries(path=None):
         return yaml.safe_load(stream)
 
 
+def _version(entry):
+    return tuple(int(v) for v in entry['software_version'])
+
+
 def read_table(path=None):
     """{ur_type: (major, minor, bugfix, build)} of the table at `path` (default: the package's)."""
-    return {name: tuple(int(v) for v in entry['software_version']) for name, entry in _read_entries(path).items()}
+    return {name: _version(entry) for name, entry in _read_entries(path).items()}
 
 
 class ControllerSoftware(object):
@@ -83,7 +87,8 @@ def for_model(ur_type, path=None):
     if ur_type not in entries:
         raise UnknownModel('%r is not a UR model the simulated arm knows; it knows %s (config/ur_software.yaml '
                            'lists each with its controller software)' % (ur_type, ', '.join(sorted(entries, key=_order))))
-    return ControllerSoftware(ur_type, read_table(path)[ur_type], str(entries[ur_type]['serial_number']))
+    entry = entries[ur_type]
+    return ControllerSoftware(ur_type, _version(entry), str(entry['serial_number']))
 
 
 def _order(name):
