@@ -172,3 +172,24 @@ def test_robot_ip_that_is_not_an_ipv4_address_is_one_line(configured_model, valu
 def test_robot_ip_is_off_unless_given(configured_model):
     assert make_settings(configured_model).robot_ip == ''
     assert make_settings(configured_model, **{'~robot_ip': ' 127.0.0.3 '}).robot_ip == '127.0.0.3'
+
+
+def test_an_idle_client_keeps_its_session_whatever_default_timeout_its_process_set(configured_model):
+    # rospy sets a 60 s default timeout on every socket its process makes afterwards, accepted ones included;
+    # the controller keeps an idle client's connection for as long as the client keeps it.
+    core = make_core(configured_model)
+    server = dashboard.serve(listen.LOOPBACK, core.dashboard, [].append, port=0)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    before = socket.getdefaulttimeout()
+    socket.setdefaulttimeout(0.2)
+    try:
+        client = Client(server.server_address[1])
+        threading.Event().wait(1.0)  # five of those timeouts, idle
+        assert client.ask('robotmode') == 'Robotmode: RUNNING'
+        client.close()
+    finally:
+        socket.setdefaulttimeout(before)
+        server.shutdown()
+        server.server_close()
+        thread.join(5.0)

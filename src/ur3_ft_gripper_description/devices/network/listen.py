@@ -53,6 +53,9 @@ class ThreadingServer(socketserver.ThreadingMixIn, socketserver.TCPServer):
         # last (Nagle): a controller's small replies come within its cycle, not 40 ms later.
         request, client_address = super().get_request()
         request.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        # A session waits on its client for as long as the client stays: rospy sets a 60 s default timeout on
+        # every socket its process makes, which would drop a client that only reads (RTDE) or idles (dashboard).
+        request.settimeout(None)
         return request, client_address
 
     def handle_error(self, request, client_address):
