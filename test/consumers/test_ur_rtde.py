@@ -49,16 +49,28 @@ def ur_type(request):
     return request.param
 
 
-def bring_up(ur_type, *arguments):
+# Each cell's output (roslaunch and its nodes), by address: a file, so that a full pipe never blocks a node.
+CELL_LOGS = {}
+
+
+def cell_log(address, lines=30):
+    """The last `lines` of what the cell at `address` printed, for an assertion's message."""
+    with open(CELL_LOGS[address], errors='replace') as log:
+        return 'the cell printed, last:\n' + ''.join(log.readlines()[-lines:])
+
+
+def bring_up(ur_type, log_dir, *arguments):
     """The address of a simulated cell of `ur_type` started for these tests (a loopback address of its own, a
     master of its own), with the bring-up's `arguments`; the bring-up ends with the generator."""
     address = '127.0.%d.%d' % (random.randint(1, 254), random.randint(2, 254))
     master = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % master)
-    node = subprocess.Popen(['roslaunch', '-p', str(master), 'ur3_ft_gripper_description',
-                             'ur_ft_gripper_bringup.launch', 'ur_type:=' + ur_type, 'sim:=true',
-                             'sim_robot_ip:=' + address] + list(arguments),
-                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, universal_newlines=True)
+    CELL_LOGS[address] = str(log_dir / ('cell-%s.log' % address))
+    with open(CELL_LOGS[address], 'w') as output:
+        node = subprocess.Popen(['roslaunch', '-p', str(master), 'ur3_ft_gripper_description',
+                                 'ur_ft_gripper_bringup.launch', 'ur_type:=' + ur_type, 'sim:=true',
+                                 'sim_robot_ip:=' + address] + list(arguments),
+                                env=env, stdout=output, stderr=subprocess.STDOUT)
     try:
         deadline = time.monotonic() + COME_UP
         while True:
@@ -66,7 +78,7 @@ def bring_up(ur_type, *arguments):
                 socket.create_connection((address, 30004), timeout=1.0).close()
                 break
             except OSError:
-                assert node.poll() is None, 'the bring-up ended: %s' % node.stdout.read()
+                assert node.poll() is None, 'the bring-up ended: %s' % cell_log(address)
                 assert time.monotonic() < deadline, 'the simulated arm did not listen within %g s' % COME_UP
                 time.sleep(0.2)
         yield address
@@ -76,9 +88,9 @@ def bring_up(ur_type, *arguments):
 
 
 @pytest.fixture(scope='module')
-def robot_ip(ur_type):
+def robot_ip(ur_type, tmp_path_factory):
     """A kinematic cell."""
-    yield from bring_up(ur_type)
+    yield from bring_up(ur_type, tmp_path_factory.mktemp('kinematic'))
 
 
 def controller_wait(receive, condition, seconds):
@@ -267,9 +279,9 @@ SETTLE, MEASURE = 2.5, 1.0  # s of the controller's time: pressing before the fo
 
 
 @pytest.fixture(scope='module')
-def physics_ip(ur_type):
+def physics_ip(ur_type, tmp_path_factory):
     """A physics cell, on its simulated clock at real time (ur_rtde keeps the wall clock's time)."""
-    yield from bring_up(ur_type, 'physics:=true')
+    yield from bring_up(ur_type, tmp_path_factory.mktemp('physics'), 'physics:=true')
 
 
 def gripper_tcp(ur_type):
@@ -285,7 +297,7 @@ def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_i
     receive = rtde_receive.RTDEReceiveInterface(physics_ip)
     control = rtde_control.RTDEControlInterface(physics_ip)
     try:
-        assert control.setTcp(gripper_tcp(ur_type))
+        assert control.setTcp(gripper_tcp(ur_type)), cell_log(physics_ip)
         # The gripper pointing down (its TCP's z along the base's -z) over the table.
         above = [-PRESS_XY[0], -PRESS_XY[1], PRESS_HEIGHT, 0.0, math.pi, 0.0]
         assert control.moveJ_IK(above, 1.0, 1.0)
