@@ -14,9 +14,11 @@ class Cell(object):
     def __init__(self, configured_model, ur_type):
         self.core, self.lock, self.logged = make_core(configured_model, ur_type), threading.RLock(), []
         self.dt = 1.0 / rtde_max_frequency(self.core)
+        self.calls = []  # (method name, arguments) of each call the faces made under the core's lock
 
         def call(method, *args):
             with self.lock:
+                self.calls.append((method.__name__, args))
                 return method(*args)
 
         self.faces = NetworkFaces(listen.LOOPBACK, self.core, call, self.logged.append,

@@ -21,6 +21,7 @@ import rospkg
 import yaml
 
 from controller_cell import Cell
+from ur3_ft_gripper_description import urscript
 from test_ur_arm_core import START
 
 ROBOT_STATE, ROBOT_MESSAGE = 16, 20
@@ -196,6 +197,21 @@ def test_the_primary_interface_takes_its_commands_and_the_secondary_a_program(ce
     assert struct.unpack_from('>i', subs[MASTERBOARD_DATA], 4)[0] == 1 << 4
     primary.close()
     secondary.close()
+
+
+def test_a_program_is_parsed_before_the_face_takes_the_cores_lock(cell):
+    # The control cycle holds that lock: a parse inside it (tenths of a second for a driver's program) would
+    # stall every stream the robot sends, which a real controller's never do.
+    primary = PrimaryClient(cell.faces.port('primary'))
+    primary.package()
+    primary.send('def lit():\n  set_standard_digital_out(3, True)\nend\n')
+    taken_in(cell, lambda: cell.core.robot.digital_out[3])
+    with cell.lock:
+        calls = list(cell.calls)
+    started = [args for name, args in calls if name == 'start_program']
+    assert len(started) == 1 and isinstance(started[0][0], urscript.Program)
+    assert not [name for name, args in calls if any('set_standard_digital_out' in str(a) for a in args)]
+    primary.close()
 
 
 def robot_messages(client, cell, condition, what, seconds=30.0):

@@ -9,6 +9,7 @@ lark-parser 0.8.1 (Ubuntu 20.04) and lark 1.1.x (22.04, 24.04, Debian 12).
 
 import os
 import re
+import threading
 
 import lark
 
@@ -157,6 +158,7 @@ class _Newlines(object):
 
 
 _PARSER = None
+_PARSER_BUILT = threading.Lock()
 # One lexer for the whole script, not lark's contextual one: that one refuses a token the parser cannot take
 # next before the post-lexer has ended the statement in front of it. Named 'standard' before lark 1.0.
 _BASIC_LEXER = 'basic' if int(lark.__version__.split('.')[0]) >= 1 else 'standard'
@@ -164,12 +166,13 @@ _BASIC_LEXER = 'basic' if int(lark.__version__.split('.')[0]) >= 1 else 'standar
 
 def _parser():
     global _PARSER
-    if _PARSER is None:
-        with open(GRAMMAR_FILE) as f:
-            grammar = f.read()
-        _PARSER = lark.Lark(grammar, parser='lalr', lexer=_BASIC_LEXER, start='start',
-                            propagate_positions=True, maybe_placeholders=False,
-                            keep_all_tokens=False, postlex=_Newlines(), debug=False)
+    with _PARSER_BUILT:  # programs arrive on several faces' threads at once
+        if _PARSER is None:
+            with open(GRAMMAR_FILE) as f:
+                grammar = f.read()
+            _PARSER = lark.Lark(grammar, parser='lalr', lexer=_BASIC_LEXER, start='start',
+                                propagate_positions=True, maybe_placeholders=False,
+                                keep_all_tokens=False, postlex=_Newlines(), debug=False)
     return _PARSER
 
 

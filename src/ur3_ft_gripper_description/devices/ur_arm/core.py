@@ -532,10 +532,21 @@ class ArmCore(object):
 
     def script_command(self, text):
         """A program on script_command: a primary one replaces the running program, a secondary runs beside."""
+        self.start_program(self.compile_program(text))
+
+    def compile_program(self, text):
+        """The Program of `text`, or the CompileError the robot refuses it with. It reads nothing a cycle
+        changes, so hosts call it without the core's lock: a long program parses for tenths of a second, and
+        the control cycle and its streams do not wait for that."""
         try:
-            program = urscript.compile_script(text, self.script_robot.served())
+            return urscript.compile_script(text, self.script_robot.served())
         except urscript.CompileError as exc:
-            self._say(ERROR, 'script_command: the robot would not compile this script: %s' % exc)
+            return exc
+
+    def start_program(self, program):
+        """compile_program's answer runs, as script_command says."""
+        if isinstance(program, urscript.CompileError):
+            self._say(ERROR, 'script_command: the robot would not compile this script: %s' % program)
             return
         if self.robot.robot_mode != rs.RUNNING:
             self._say(ERROR, 'script_command: the robot is %s; it runs programs only when RUNNING'

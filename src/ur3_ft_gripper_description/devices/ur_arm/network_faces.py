@@ -37,7 +37,7 @@ class NetworkFaces(object):
                                   lambda values: call(rtde_fields.apply_inputs, core, values), log)
         self.realtime = realtime.Realtime(realtime.Layout(generation, software.version))
         self.primary = primary.Primary(primary.StateLayout(generation, software.version), software.version)
-        run = lambda text: call(core.script_command, text)  # noqa: E731
+        run = lambda text: call(core.start_program, core.compile_program(text))  # noqa: E731
         answer = lambda command: call(core.dashboard, command)  # noqa: E731
         self.servers = []
         try:
