@@ -14,7 +14,7 @@ import pytest
 from ur3_ft_gripper_testing.rtde_client import RtdeClient
 
 COME_UP = 60.0  # wall s for the process to expand the model and listen
-PORTS = (29999, 30001, 30002, 30003, 30004)
+PORTS = (29999, 30001, 30002, 30003, 30004, 30011, 30012, 30013)
 
 
 def start(*args):

@@ -199,6 +199,24 @@ def test_the_primary_interface_takes_its_commands_and_the_secondary_a_program(ce
     secondary.close()
 
 
+def test_the_read_only_twins_send_the_same_and_take_nothing_in(cell):
+    primary, read_only = PrimaryClient(cell.faces.port('primary')), PrimaryClient(cell.faces.port('primary_read_only'))
+    secondary_read_only = PrimaryClient(cell.faces.port('secondary_read_only'))
+    for client in (primary, read_only, secondary_read_only):
+        assert client.package()[0] == ROBOT_MESSAGE  # the version message
+    read_only.send('power off\n')
+    secondary_read_only.send('sec lit():\n  set_standard_digital_out(5, True)\nend\n')
+    taken_in(cell, lambda: len(cell.logged) == 2)
+    subs, _ = read_only.newest_state(cell)
+    assert robot_mode(subs) == (True, RUNNING) and not cell.core.robot.digital_out[5]
+    assert sorted(line.split(':')[0] for line in cell.logged) == ['primary interface (read-only)',
+                                                                  'secondary interface (read-only)']
+    assert all('read-only' in line for line in cell.logged)
+    assert [s for s, _ in secondary_read_only.newest_state(cell)[1]] == [s for s, _ in primary.newest_state(cell)[1]]
+    for client in (primary, read_only, secondary_read_only):
+        client.close()
+
+
 def test_a_program_is_parsed_before_the_face_takes_the_cores_lock(cell):
     # The control cycle holds that lock: a parse inside it (tenths of a second for a driver's program) would
     # stall every stream the robot sends, which a real controller's never do.

@@ -143,6 +143,20 @@ def test_text_that_is_not_urscript_costs_the_connection_and_the_robot_goes_on(ce
     good.close()
 
 
+def test_the_read_only_twin_sends_the_same_package_and_runs_nothing(cell):
+    read_only = RealtimeClient(cell.faces.port('realtime_read_only'))
+    package = read_only.taken_in(cell)
+    assert len(package) == struct.unpack('>i', package[:4])[0] == len(RealtimeClient(cell.port).taken_in(cell))
+    read_only.send('set_standard_digital_out(6, True)\n')
+    step_until(cell, lambda: cell.logged, 'the face\'s line on the text it was sent')
+    cell.step(10)
+    assert not cell.core.robot.digital_out[6]
+    assert len(cell.logged) == 1 and 'read-only' in cell.logged[0] and 'port 30003' in cell.logged[0]
+    while doubles(read_only.package(), 'time') != pytest.approx(cell.core.uptime, abs=1e-9):
+        pass  # the twin goes on sending, to the last cycle
+    read_only.close()
+
+
 def test_the_reader_frames_programs_as_the_controller_does():
     reader = ScriptReader()
     assert reader.feed(b'textmsg("a")\n\ndef p():\n  if True:\n    sleep(1)\n') == ['textmsg("a")\n']

@@ -24,9 +24,11 @@ import yaml
 from ..sim_params import PackageFile
 from . import listen
 from .versions import available
-from .script_text import read_programs
+from .script_text import ignore_input, read_programs
 
 PORTS = {'primary': 30001, 'secondary': 30002}
+# The read-only twins (UR's client interface document): the same packages, nothing taken in.
+READ_ONLY_PORTS = {'primary': 30011, 'secondary': 30012}
 ROBOT_STATE, ROBOT_MESSAGE = 16, 20
 VERSION, KEY, RUNTIME_EXCEPTION = 3, 7, 10  # robot message types
 # Robot message sources as ur_client_library's captures have them: the controller's own messages, and
@@ -173,12 +175,15 @@ class Primary(listen.Broadcast):
         self.send(read)
 
 
-def serve(name, address, primary, run, dashboard, log, port=None):
+def serve(name, address, primary, run, dashboard, log, port=None, read_only=False):
     """A listening primary ('primary') or secondary ('secondary') interface at (address, port) over
     `primary`; `run(text)` runs a program, `dashboard(command)` a controller command (primary only).
+    `read_only`: its twin on READ_ONLY_PORTS, which sends the same and takes nothing in.
     The caller runs serve_forever() in a thread and shutdown() at the end (listen.ThreadingServer)."""
-    face = '%s interface' % name
+    face = '%s interface%s' % (name, ' (read-only)' if read_only else '')
     commands = PRIMARY_COMMANDS if name == 'primary' else {}
+    if port is None:
+        port = (READ_ONLY_PORTS if read_only else PORTS)[name]
 
     def take(text):
         command = commands.get(text.strip())
@@ -198,7 +203,10 @@ def serve(name, address, primary, run, dashboard, log, port=None):
                 with primary.lock:
                     primary.message_clients.append(outbox.put)
             try:
-                read_programs(self.request, client, face, take, log)
+                if read_only:
+                    ignore_input(self.request, client, face, PORTS[name], log)
+                else:
+                    read_programs(self.request, client, face, take, log)
             finally:
                 primary.remove(outbox.put)
                 if name == 'primary':
@@ -206,4 +214,4 @@ def serve(name, address, primary, run, dashboard, log, port=None):
                         primary.message_clients.remove(outbox.put)
                 outbox.close()
 
-    return listen.serve(face, address, PORTS[name] if port is None else port, Connection, log)
+    return listen.serve(face, address, port, Connection, log)

@@ -22,9 +22,10 @@ import yaml
 from ..sim_params import PackageFile
 from . import listen
 from .versions import available
-from .script_text import read_programs
+from .script_text import ignore_input, read_programs
 
 PORT = 30003
+READ_ONLY_PORT = 30013  # its read-only twin (UR's overview of the client interfaces): nothing taken in
 # A client that does not read: a second of packages at the fastest rate waits, then its connection ends.
 SEND_QUEUE = 500
 
@@ -64,20 +65,27 @@ class Realtime(listen.Broadcast):
         self.send(read)
 
 
-def serve(address, realtime, run, log, port=PORT):
+def serve(address, realtime, run, log, port=None, read_only=False):
     """A listening real-time interface at (address, port); `run(text)` runs a program the client sent.
+    `read_only`: its twin (READ_ONLY_PORT), which sends the same and takes nothing in.
     The caller runs serve_forever() in a thread and shutdown() at the end (listen.ThreadingServer)."""
+    face = 'real-time interface%s' % (' (read-only)' if read_only else '')
+    if port is None:
+        port = READ_ONLY_PORT if read_only else PORT
 
     class Connection(socketserver.BaseRequestHandler):
         def handle(self):
             client = '%s:%d' % self.client_address[:2]
-            outbox = listen.Outbox(self.request, SEND_QUEUE, 'real-time interface: %s does not read its packages: '
-                                   'its connection is closed' % client, log)
+            outbox = listen.Outbox(self.request, SEND_QUEUE, '%s: %s does not read its packages: '
+                                   'its connection is closed' % (face, client), log)
             realtime.add(outbox.put)
             try:
-                read_programs(self.request, client, 'real-time interface', run, log)
+                if read_only:
+                    ignore_input(self.request, client, face, PORT, log)
+                else:
+                    read_programs(self.request, client, face, run, log)
             finally:
                 realtime.remove(outbox.put)
                 outbox.close()
 
-    return listen.serve('real-time interface', address, port, Connection, log)
+    return listen.serve(face, address, port, Connection, log)

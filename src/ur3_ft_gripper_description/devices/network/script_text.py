@@ -60,3 +60,17 @@ def read_programs(sock, client, face, run, log):
             return
         for program in programs:
             run(program)
+
+
+def ignore_input(sock, client, face, writable_port, log):
+    """What `client` sends to a read-only port is read and dropped until it closes: the first of it is one
+    log line naming the port that would take it."""
+    said = False
+    while True:
+        data = sock.recv(65536)
+        if not data:
+            return
+        if not said:
+            said = True
+            log('%s: %s sent text; this port is read-only and runs nothing: send programs and commands to port %d'
+                % (face, client, writable_port))

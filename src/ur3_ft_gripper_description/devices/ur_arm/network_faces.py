@@ -18,7 +18,10 @@ from .script_robot import STEP_TIME
 
 # The robot's port of each face, in the order they are served.
 PORTS = {'dashboard': dashboard.PORT, 'primary': primary.PORTS['primary'], 'secondary': primary.PORTS['secondary'],
-         'realtime': realtime.PORT, 'rtde': rtde.PORT}
+         'realtime': realtime.PORT, 'rtde': rtde.PORT,
+         'primary_read_only': primary.READ_ONLY_PORTS['primary'],
+         'secondary_read_only': primary.READ_ONLY_PORTS['secondary'],
+         'realtime_read_only': realtime.READ_ONLY_PORT}
 
 
 class NetworkFaces(object):
@@ -46,6 +49,11 @@ class NetworkFaces(object):
                 self.servers.append(primary.serve(name, address, self.primary, run, answer, log, ports[name]))
             self.servers.append(realtime.serve(address, self.realtime, run, log, ports['realtime']))
             self.servers.append(rtde.serve(address, self.rtde, log, ports['rtde']))
+            for name in ('primary', 'secondary'):
+                self.servers.append(primary.serve(name, address, self.primary, run, answer, log,
+                                                  ports[name + '_read_only'], read_only=True))
+            self.servers.append(realtime.serve(address, self.realtime, run, log, ports['realtime_read_only'],
+                                               read_only=True))
         except listen.ListenError:
             for server in self.servers:
                 server.server_close()
