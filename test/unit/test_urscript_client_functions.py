@@ -67,6 +67,12 @@ def test_servoc_takes_the_tcp_to_the_pose(cell):
     assert float(core.robot.log[0]) == pytest.approx(0.0, abs=1e-6)
 
 
+def test_a_bad_servoc_target_stops_the_program_naming_servoc(cell):
+    core, dt = cell
+    messages = run(core, dt, 'servoc([0.1, 0.2, 0.3, 0, 0], a=1.2, v=0.25)\n')
+    assert len(errors(messages)) == 1 and 'Error: servoc must be a list of 6' in errors(messages)[0], errors(messages)
+
+
 def test_the_safety_limits_are_the_joint_limits_and_the_arms_reach(cell):
     core, dt = cell
     lower, upper = core.arm.lower, core.arm.upper

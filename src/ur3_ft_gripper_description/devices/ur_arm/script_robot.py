@@ -459,14 +459,14 @@ class ScriptRobot(object):
             return tm.tcp_pose(self.core.arm, self.core.tcp, _floats(pose, 6, what))
         return _matrix(pose, what)
 
-    def _movel(self, pose, a, v, t, r):
-        target = self._cartesian_target(pose, 'movel')
+    def _movel(self, pose, a, v, t, r, what='movel'):
+        target = self._cartesian_target(pose, what)
         return self._motion(lambda: tm.LinearMove(self.core.arm, self.core.tcp, *self._q_start(), target_pose=target,
                                                   a=a, v=v, t=t, r=r, previous=self._previous()))
 
     def _servoc(self, pose, a, v, r):
         # Servo in a circle-blended line in tool space: movel's straight line at tool speed v, blended by r.
-        return self._movel(pose, a, v, 0.0, r)
+        return self._movel(pose, a, v, 0.0, r, what='servoc')
 
     def _movep(self, pose, a, v, r):
         target = self._cartesian_target(pose, 'movep')
