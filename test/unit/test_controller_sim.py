@@ -47,6 +47,19 @@ def test_every_interface_listens_on_the_robots_ports(controller):
         socket.create_connection((controller, port), timeout=10.0).close()
 
 
+def test_it_starts_as_a_robot_without_its_driver_powered_and_its_program_loaded_not_playing(controller):
+    # As a client finds a robot whose driver has not started External Control: ur_rtde then sends its own
+    # program at once, rather than first waiting for one that never answers it.
+    with socket.create_connection((controller, 29999), timeout=10.0) as dashboard:
+        lines = dashboard.makefile('rb')
+        lines.readline()  # the greeting
+        answers = []
+        for command in ('robotmode', 'programState'):
+            dashboard.sendall(command.encode() + b'\n')
+            answers.append(lines.readline().decode().strip())
+    assert answers == ['Robotmode: RUNNING', 'STOPPED external_control.urp']
+
+
 def test_the_controller_steps_at_its_rate_and_a_program_moves_the_arm(controller):
     client = RtdeClient(30004, controller)
     assert client.negotiate(2)

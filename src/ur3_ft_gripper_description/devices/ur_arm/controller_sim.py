@@ -56,7 +56,10 @@ def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None, script_
                               '%s_controllers.yaml' % ur_type)
         values = {'~ur_type': ur_type, '~controller_config_file': config, 'robot_description': urdf,
                   '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller',
-                  '~script_socket_hosts': script_socket_hosts}
+                  '~script_socket_hosts': script_socket_hosts,
+                  # As a controller without its driver: powered, External Control loaded and not playing, so
+                  # that a client's first program (ur_rtde's, the driver's headless one) is sent straight in.
+                  '~program_running': False}
         settings = read_settings(lambda name, default=None: values.get(name, default))
     except (software.UnknownModel, DescriptionError, sim_params.ParamError) as error:
         raise ControllerError(str(error)) from None
