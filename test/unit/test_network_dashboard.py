@@ -6,6 +6,7 @@ command ended by a newline and read one reply line. The robot behind it is
 the core as the arm's node builds it (kinematic joints), so the replies and
 their effects are the robot's own.
 """
+import select
 import socket
 import threading
 
@@ -13,6 +14,7 @@ import pytest
 
 from ur3_ft_gripper_description.devices import sim_params
 from ur3_ft_gripper_description.devices.network import dashboard, listen
+from controller_cell import Cell
 from test_ur_arm_core import make_core, make_settings
 
 
@@ -193,3 +195,21 @@ def test_an_idle_client_keeps_its_session_whatever_default_timeout_its_process_s
         server.shutdown()
         server.server_close()
         thread.join(5.0)
+
+
+def test_stop_replies_once_the_faces_have_sent_the_cycle_that_carries_it(configured_model):
+    # UR's document (CB3 3.3 on, every e-Series): play, stop, pause and load return when done, so a client
+    # reading RTDE after "Stopped" (ur_rtde does, 0.1 s later) finds the program stopped.
+    cell = Cell(configured_model, 'ur5e')
+    try:
+        client = Client(cell.faces.port('dashboard'))
+        assert client.ask('robotmode') == 'Robotmode: RUNNING'  # a query answers at once, with no cycle
+        assert cell.core.robot.program_state == 'PLAYING'  # External Control, as the cell starts
+        client.send(b'stop\n')
+        assert select.select([client.socket], [], [], 0.3)[0] == []  # no cycle yet, no reply
+        cell.step()
+        assert client.line() == 'Stopped'
+        assert cell.core.robot.program_state == 'STOPPED'
+        client.close()
+    finally:
+        cell.faces.shutdown()

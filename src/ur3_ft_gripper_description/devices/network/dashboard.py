@@ -21,6 +21,14 @@ GREETING = 'Connected: Universal Robots Dashboard Server'
 QUIT, QUIT_REPLY = 'quit', 'Disconnected'
 # Longer than any command with a program's path (PolyScope's file names are short): beyond it, not a command.
 MAX_LINE = 4096
+# The commands that reply once they are done, not once asked (UR's Dashboard Server document: CB3 3.3 on,
+# and every e-Series): a client that reads the program state after "Stopped" finds the program stopped.
+DONE_BEFORE_REPLY = ('play', 'stop', 'pause', 'load')
+
+
+def done_before_reply(command):
+    words = command.split()
+    return bool(words) and words[0].lower() in DONE_BEFORE_REPLY
 
 
 def reply_to(answer, line):

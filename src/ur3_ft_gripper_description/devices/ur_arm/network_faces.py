@@ -24,6 +24,28 @@ PORTS = {'dashboard': dashboard.PORT, 'primary': primary.PORTS['primary'], 'seco
          'realtime_read_only': realtime.READ_ONLY_PORT}
 
 
+# Wall s a command that replies once done waits for the next cycle at most: a cell whose clock stands
+# (paused, or stepped by hand) still answers.
+DONE_WAIT = 1.0
+
+
+class CycleCount(object):
+    """The control cycles the faces have sent, for a thread that waits for the next."""
+
+    def __init__(self):
+        self.count = 0
+        self.changed = threading.Condition()
+
+    def tick(self):
+        with self.changed:
+            self.count += 1
+            self.changed.notify_all()
+
+    def wait_past(self, count, timeout):
+        with self.changed:
+            return self.changed.wait_for(lambda: self.count > count, timeout)
+
+
 class NetworkFaces(object):
     """The faces of `core` listening on `address` (listen.ListenError, one line, if one cannot)."""
 
@@ -41,7 +63,15 @@ class NetworkFaces(object):
         self.realtime = realtime.Realtime(realtime.Layout(generation, software.version))
         self.primary = primary.Primary(primary.StateLayout(generation, software.version), software.version)
         run = lambda text: call(core.start_program, core.compile_program(text))  # noqa: E731
-        answer = lambda command: call(core.dashboard, command)  # noqa: E731
+        self.cycles = CycleCount()
+
+        def answer(command):
+            reply, cycle = call(lambda: (core.dashboard(command), self.cycles.count))
+            if dashboard.done_before_reply(command):
+                # Done is when the faces have sent the cycle that carries it.
+                self.cycles.wait_past(cycle, DONE_WAIT)
+            return reply
+
         self.servers = []
         try:
             self.servers.append(dashboard.serve(address, answer, log, ports['dashboard']))
@@ -94,6 +124,7 @@ class NetworkFaces(object):
         self.rtde.cycle(read)
         self.realtime.cycle(read)
         self.primary.cycle(dt, read, self.core.take_program_events())
+        self.cycles.tick()
 
     def _reader(self, name):
         reader = self.readers.get(name)
