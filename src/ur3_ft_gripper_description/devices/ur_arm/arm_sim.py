@@ -130,8 +130,8 @@ class ArmSim(object):
         rospy.Service('~zero_ftsensor', Trigger, lambda req: self._call(core.zero_ftsensor))
         rospy.Service('~get_robot_software_version', ur_srv.GetRobotSoftwareVersion,
                       lambda req: core.software_version())
-        rospy.Subscriber('~script_command', String, lambda msg: self._call(core.start_program, core.compile_program(msg.data)),
-                         queue_size=10)
+        rospy.Subscriber('~script_command', String,
+                         lambda msg: self._call(core.start_program, core.compile_program(msg.data)), queue_size=10)
 
         # -- controller_manager
         rospy.Service('controller_manager/list_controllers', cm_srv.ListControllers, self._list_controllers)

@@ -6,7 +6,8 @@ over each cycle's Snapshot (the real-time package is RTDE's fields in UR's
 order); programs sent as text run as script_command's do.
 Every call into the core goes through `call(method, *args)`, which the host
 (the ROS node, or a test) makes hold the core's lock, so the faces and the
-ROS interface see one robot. The host calls `after_cycle` after each
+ROS interface see one robot; a program is compiled before, outside the lock
+(core.compile_program reads nothing a cycle changes). The host calls `after_cycle` after each
 control cycle, holding that lock.
 """
 
