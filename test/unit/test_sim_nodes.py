@@ -7,7 +7,7 @@ import pytest
 import yaml
 from transforms3d.quaternions import quat2mat
 
-from ur3_ft_gripper_description.devices import ft300_sim, gripper_joint_states, gripper_sim, sim_params
+from ur3_ft_gripper_description.devices import ft300_sim, gripper_joint_states, gripper_sim, sim_params, wrench_model
 from ur3_ft_gripper_testing.model import PACKAGE_DIR, configured
 
 
@@ -171,6 +171,20 @@ def test_zero_before_any_reading_zeroes_the_first():
     assert sensor.read_gravity(*DOWN) == pytest.approx((0,) * 6, abs=1e-6)
 
 
+def test_a_zero_requested_ahead_of_the_readings_sent_takes_the_one_at_the_request():
+    # On physics this node reads the cell's samples in order and on a busy machine runs behind: a zero
+    # asked at reading 5 leaves readings 3 and 4 as they were, and takes reading 4 as the zero.
+    settings = noise_free()
+    sensor = ft300_sim.SensorModel(settings)
+    poses = {index: DOWN if index < 5 else UP for index in range(3, 8)}
+    sensor.read_gravity(*DOWN)
+    sensor.request_zero(index=5)
+    read = {index: sensor.read(wrench_model.gravity_wrench(*poses[index], settings.load.mass, settings.load.com),
+                               index) for index in sorted(poses)}
+    assert read[3][2] == read[4][2] == pytest.approx(9.5615, abs=0.006)  # the gripper's weight, unzeroed
+    assert read[5][2] == pytest.approx(-2 * 9.5615, abs=0.006)  # relative to reading 4, the tool down
+
+
 # -- robotiq_ft_sensor_acc, as rq_sensor answers -------------------------------------
 
 IDENTITY = dict(serial_number='SIM-0000', firmware_version='SIM-0.0.0', production_year='2026')
@@ -197,7 +211,7 @@ class ZeroCounter(object):
     def __init__(self):
         self.zeroes = 0
 
-    def request_zero(self):
+    def request_zero(self, index=None):
         self.zeroes += 1
 
 

@@ -166,6 +166,7 @@ class SensorModel(object):
         self.rng = rng if rng is not None else np.random.default_rng()
         self.last_true = None  # noise-free wrench at the last known pose
         self._zero_requested = False
+        self._zero_index = None  # the reading number on the simulated clock a zero was requested at
         self._mass = float(settings.load.mass)
         self._com = tuple(float(v) for v in settings.load.com)
         self._noisy = bool(settings.noise_force or settings.noise_torque)
@@ -195,7 +196,7 @@ class SensorModel(object):
         its noise: the same simulated time gets the same noise in every run, however the processes
         were scheduled. None: the next of this sensor's own noise sequence (the wall clock).
         """
-        if self._zero_requested:
+        if self._zero_requested and (index is None or self._zero_index is None or index >= self._zero_index):
             # As rq_sensor_com does: the reading before the request becomes the zero.
             # Its noise-free value is taken, what the noise averages out to.
             self._zero_requested = False
@@ -221,12 +222,19 @@ class SensorModel(object):
             self._indexed_block = block
         return self._indexed_noise[index % NOISE_BLOCK]
 
-    def request_zero(self):
-        """SET_ZERO: the next reading and those after it are relative to the current one."""
+    def request_zero(self, index=None):
+        """SET_ZERO: the next reading and those after it are relative to the current one.
+
+        `index`: the request's reading number on the simulated clock. Readings before it that this node
+        has yet to send (it reads a physics cell's samples in order, and on a busy machine runs behind)
+        are not zeroed, and the one just before it becomes the zero, as the real sensor's reading at the
+        request does.
+        """
         self._zero_requested = True
+        self._zero_index = index
 
 
-def accessor_reply(command_id, command, sensor, identity, log):
+def accessor_reply(command_id, command, sensor, identity, log, zero_index=None):
     """(success, res) of rq_sensor's robotiq_ft_sensor_acc for a request; `log` has info/warn/warn_once.
 
     The deprecated 7-character string (``command``) wins over ``command_id``,
@@ -244,7 +252,7 @@ def accessor_reply(command_id, command, sensor, identity, log):
                 res = {'SNU': identity['serial_number'], 'FWV': identity['firmware_version'],
                        'PYE': identity['production_year']}.get(name, '')
             elif action == 'SET' and 'ZRO' in name:
-                sensor.request_zero()
+                sensor.request_zero(zero_index)
                 res = 'Done'
         log.info('I send: [%s]' % res)
         return False, res
@@ -255,7 +263,7 @@ def accessor_reply(command_id, command, sensor, identity, log):
     if command_id == 4:
         return True, identity['production_year']
     if command_id == 8:
-        sensor.request_zero()
+        sensor.request_zero(zero_index)
         return True, 'Done'
     log.warn("Unsupported command_id '%i', should be in [1, 2, 4, 8]" % command_id)
     return False, 'Unsupported command_id'
@@ -424,9 +432,12 @@ def run(rospy):
     wrench_publisher = rospy.Publisher('robotiq_ft_wrench', WrenchStamped, queue_size=512)
     log = _Log(rospy)
 
+    period_ns = int(round(1e9 / settings.rate))
+
     def accessor(request):
+        now = rospy.Time.now().to_nsec() // period_ns if sim_time else None
         success, res = accessor_reply(request.command_id, request.command, sensor,
-                                      settings.identity, log)
+                                      settings.identity, log, zero_index=now)
         return sensor_accessorResponse(success=success, res=res)
 
     rospy.Service('robotiq_ft_sensor_acc', sensor_accessor, accessor)
@@ -436,7 +447,6 @@ def run(rospy):
     message.header.frame_id = settings.frame_id
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
     lost = []
-    period_ns = int(round(1e9 / settings.rate))
 
     def step(now=None):
         try:
