@@ -12,6 +12,7 @@ import time
 import pytest
 
 from ur3_ft_gripper_testing.rtde_client import RtdeClient
+from test_network_dashboard import Client as DashboardClient
 
 COME_UP = 60.0  # wall s for the process to expand the model and listen
 PORTS = (29999, 30001, 30002, 30003, 30004, 30011, 30012, 30013)
@@ -50,13 +51,9 @@ def test_every_interface_listens_on_the_robots_ports(controller):
 def test_it_starts_as_a_robot_without_its_driver_powered_and_its_program_loaded_not_playing(controller):
     # As a client finds a robot whose driver has not started External Control: ur_rtde then sends its own
     # program at once, rather than first waiting for one that never answers it.
-    with socket.create_connection((controller, 29999), timeout=10.0) as dashboard:
-        lines = dashboard.makefile('rb')
-        lines.readline()  # the greeting
-        answers = []
-        for command in ('robotmode', 'programState'):
-            dashboard.sendall(command.encode() + b'\n')
-            answers.append(lines.readline().decode().strip())
+    dashboard = DashboardClient(29999, controller)
+    answers = [dashboard.ask(command) for command in ('robotmode', 'programState')]
+    dashboard.close()
     assert answers == ['Robotmode: RUNNING', 'STOPPED external_control.urp']
 
 
