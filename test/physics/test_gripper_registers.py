@@ -23,11 +23,11 @@ def registers(make_cell, between_pads, tmp_path):
     """registers(world text) -> a RegisterGripper on that cell's fingers."""
     made = []
 
-    def make(world):
+    def make(world, sample_period=None):
         served = Served(make_cell(world, START), str(tmp_path / ('cell%d.sock' % len(made))))
         made.append(served)
         spec = gripper_sim.spec_from_params(lambda name, default=None: default)
-        fingers = gripper_sim.PhysicsFingers(CellClient(served.server.path), spec)
+        fingers = gripper_sim.PhysicsFingers(CellClient(served.server.path), spec, sample_period=sample_period)
         return gripper_sim.RegisterGripper(spec, lambda text: None, fingers=fingers)
     yield make
     for served in made:
@@ -138,3 +138,27 @@ def test_the_fingers_close_and_open_at_the_speed_rsp_asks(registers, rsp):
     # 3.2.3 and 4); 2 % is slack for the solver, far finer than the step between these rSP values.
     assert closing == pytest.approx(asked, rel=0.02)
     assert opening == pytest.approx(asked, rel=0.02)
+
+
+def test_a_node_running_late_publishes_each_status_with_the_fingers_of_its_own_time(registers):
+    """On a simulated clock the node serves the ticks it missed, late: here the whole stroke at rSP 0. Each
+    status must still show the fingers at its tick (the cell keeps them), so that the statuses, one per
+    50th of a simulated second, move at the speed rSP asks and end closed, not all at the late moment."""
+    gripper = registers('', sample_period=PERIOD)
+    spec, client = gripper.spec, gripper.fingers.client
+    activate(gripper)
+    command(gripper, rACT=1, rGTO=1, rPR=255, rSP=0, rFR=50)
+    commanded = client.finger()[0]
+    end = time.monotonic() + 60.0
+    while client.finger()[1]['motion'] == 'moving' and time.monotonic() < end:
+        time.sleep(0.05)  # the node starved meanwhile
+    now = client.finger()[0]
+    ticks = [n * PERIOD for n in range(int(commanded / PERIOD) + 1, int(now / PERIOD) + 1)]
+    statuses = []
+    for at in ticks:
+        gripper.advance(PERIOD, at)
+        statuses.append(gripper.status())
+    assert (statuses[-1]['gOBJ'], statuses[-1]['gPO']) == (3, int(spec.gpo_closed))
+    closing = -gap_rate(gripper, [(at, spec.scale.opening(s['gPO'])) for at, s in zip(ticks, statuses)
+                                  if s['gOBJ'] == 0])
+    assert closing == pytest.approx(spec.min_speed, rel=0.02)

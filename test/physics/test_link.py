@@ -119,6 +119,11 @@ def test_a_wrench_sample_period_of_no_whole_number_of_timesteps_is_refused_in_on
         client.wrench_samples(0.003)
     assert '0.003' in str(raised.value) and '0.002' in str(raised.value) and '\n' not in str(raised.value)
     assert client.wrench_samples(0.01)[2] == 0  # the link still serves
+    for period in (0.0, -0.02, float('nan')):
+        with pytest.raises(LinkError) as raised:
+            client.finger_samples(period)
+        assert 'finger sample period' in str(raised.value) and '\n' not in str(raised.value)
+    assert client.finger_samples(0.02)[1:] == ([], 0)  # keeping from now on
     with pytest.raises(LinkError) as raised:
         client._ask('hello', VERSION - 1)
     assert 'link version %d' % VERSION in str(raised.value)

@@ -426,8 +426,8 @@ class RockingFingers(gripper_sim.KinematicFingers):
         super(RockingFingers, self).__init__(spec, object_width)
         self.cycles_on_it = 0
 
-    def advance(self, dt):
-        motion = super(RockingFingers, self).advance(dt)
+    def advance(self, dt, at=None):
+        motion = super(RockingFingers, self).advance(dt, at)
         if motion != gripper_sim.ON_OBJECT:
             return motion
         self.cycles_on_it += 1

@@ -56,6 +56,7 @@ Its private parameters are declared in PARAMETERS below (their reference:
 doc/node_parameters.md).
 """
 
+import collections
 import math
 import threading
 import time
@@ -106,9 +107,10 @@ class KinematicFingers(object):
     """Fingers without physics: straight toward the target, stopping on a part `object_width` m wide when closing.
 
     The seam, in register counts (gPO's scale): `position`; go(target, speed
-    counts/s, force 0..1 of the grip force range); stop(); advance(dt) -> MOVING,
-    AT_TARGET or ON_OBJECT; squeeze(), the share of the full grip force the
-    fingers press an object with.
+    counts/s, force 0..1 of the grip force range); stop(); advance(dt, at=None)
+    -> MOVING, AT_TARGET or ON_OBJECT (`at`: the simulated time the status is
+    for); squeeze(), the share of the full grip force the fingers press an
+    object with.
     """
 
     def __init__(self, spec, object_width=None, initial_position=None):
@@ -128,7 +130,7 @@ class KinematicFingers(object):
         if self.motion == MOVING:
             self.target, self.motion = self.position, AT_TARGET
 
-    def advance(self, dt):
+    def advance(self, dt, at=None):
         if self.motion == MOVING:
             start = self.position
             self.position = gripper_model.step_toward(start, self.target, self.speed, dt)
@@ -147,11 +149,17 @@ class PhysicsFingers(object):
     """The physics cell's fingers through the link (`client`: a link.CellClient), in register counts.
 
     Same seam as KinematicFingers; gPO is the gap through the unit's register
-    scale, or the request while the fingers stand at it.
+    scale, or the request while the fingers stand at it. With `sample_period`
+    (s, the node's on a simulated clock), advance(dt, at) reports the fingers
+    as the cell kept them at simulated time `at`, so that a node running late
+    still publishes each status with the fingers of its own time.
     """
 
-    def __init__(self, client, spec, open_tolerance=0.001):
+    def __init__(self, client, spec, open_tolerance=0.001, sample_period=None):
         self.client, self.scale = client, spec.scale
+        self.sample_period, self._waiting, self._commanded_at = sample_period, collections.deque(), -math.inf
+        if sample_period is not None:
+            self.client.finger_samples(sample_period)  # the cell keeps them from now on
         gripper = client.info['gripper']
         self.force_range = tuple(gripper['grip_force_range'])
         state = client.finger()[1]
@@ -172,7 +180,8 @@ class PhysicsFingers(object):
         low, high = self.force_range
         self.target, self.speed = float(target), float(speed) / self.scale.counts_per_metre
         self.force = low + (high - low) * min(max(float(force), 0.0), 1.0)
-        self.state = self.client.finger(self.scale.opening(self.target), self.speed, self.force)[1]
+        self._commanded_at, self.state = self.client.finger(self.scale.opening(self.target), self.speed,
+                                                            self.force)
         # Moving until the cell has stepped and advance() says otherwise.
         self.position, self.motion = self.scale.position(self.state['opening']), MOVING
 
@@ -180,10 +189,27 @@ class PhysicsFingers(object):
         if self.motion == MOVING:
             opening = self.client.finger()[1]['opening']
             self.target = self.scale.position(opening)
-            self._show(self.client.finger(opening, self.speed, self.force)[1])
+            self._commanded_at, state = self.client.finger(opening, self.speed, self.force)
+            self._show(state)
 
-    def advance(self, dt):
-        return self._show(self.client.finger()[1])
+    def advance(self, dt, at=None):
+        if at is None or self.sample_period is None:
+            return self._show(self.client.finger()[1])
+        if at < self._commanded_at:
+            return self.motion  # a status due before the last command, served late: the command's own
+        return self._show(self._kept_at(at))
+
+    def _kept_at(self, at, tolerance=1e-6):
+        """The state the cell kept for time `at` (none from before the last command); the state now if the cell
+        has not reached `at` yet (it is at most a control cycle behind this node's clock)."""
+        waiting = self._waiting
+        if not waiting or waiting[-1][0] < at - tolerance:
+            waiting.extend(self.client.finger_samples(self.sample_period)[1])
+        while waiting and (waiting[0][0] < at - tolerance or waiting[0][0] < self._commanded_at):
+            waiting.popleft()
+        if waiting:
+            return waiting.popleft()[1] if waiting[0][0] <= at + tolerance else waiting[0][1]
+        return self.client.finger()[1]
 
     def squeeze(self):
         # Asked while the register machine holds an object: the drive's force, also while a held part
@@ -284,8 +310,8 @@ class RegisterGripper(object):
 
     # -- time ----------------------------------------------------------------
 
-    def advance(self, dt):
-        """Let `dt` seconds pass."""
+    def advance(self, dt, at=None):
+        """Let `dt` seconds pass; `at`: the simulated time they end at, on a simulated clock."""
         dt = max(float(dt), 0.0)
         c = self.command
         if self.state == 'activating':
@@ -302,7 +328,7 @@ class RegisterGripper(object):
             return
         if self.state == 'released' or not (self.moving or self.holding):
             return
-        motion = self.fingers.advance(dt)
+        motion = self.fingers.advance(dt, at)
         if self.state == 'releasing':
             if motion != MOVING:
                 self.state, self.fault, self.moving = 'released', FAULT_AUTO_RELEASE_DONE, False
@@ -401,7 +427,9 @@ def run(rospy):
             rospy.logfatal("gripper_sim: the physics cell's model has no 2F-140: start the arm with the "
                            'model that has it (gripper:=true)')
             return 1
-        fingers = PhysicsFingers(client, spec)
+        # On the simulated clock each status shows the fingers at its own time (run_on_every_tick below).
+        fingers = PhysicsFingers(client, spec, sample_period=1.0 / rate if rospy.get_param('/use_sim_time', False)
+                                 else None)
     gripper = RegisterGripper(spec, rospy.logwarn, object_width=width, initial_position=initial, fingers=fingers)
     # Five seconds of statuses at 50 Hz, as the FT 300 keeps five of its 100 Hz: on a simulated clock
     # faster than real time a subscriber starved for a moment gets every tick late, not a gap.
@@ -427,13 +455,13 @@ def run(rospy):
                   '' if width is None else ', object of %g m between the pads' % width)
     message = Robotiq2FGripper_robot_input()
 
-    def publish_after(dt):
-        """Let `dt` s pass in the register machine, then publish its status."""
+    def publish_after(dt, at=None):
+        """Let `dt` s pass in the register machine (to simulated time `at`), then publish its status."""
         with lock:
             if lost:
                 return
             try:
-                gripper.advance(dt)
+                gripper.advance(dt, at)
             except link.LinkError as exc:
                 lost.append(link.lost_cell(rospy, 'gripper_sim', exc))
                 return
@@ -447,7 +475,7 @@ def run(rospy):
         # this node runs; a command takes effect at the cell's next control cycle (physics) or this
         # node's next tick.
         period = 1.0 / rate
-        status = node_loop.run_on_every_tick(rospy, rate, lambda stamp: publish_after(period))
+        status = node_loop.run_on_every_tick(rospy, rate, lambda stamp: publish_after(period, stamp.to_sec()))
     else:
         clock = {'time': rospy.Time.now()}
 

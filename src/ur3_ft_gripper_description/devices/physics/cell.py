@@ -26,7 +26,9 @@
   capped at what squeezes with `force` (by virtual work, the torque is the
   force times d(gap)/d(angle), from the model's own GripperKinematics);
   ``finger()`` says where the fingers are and whether they reached the
-  target, stopped on an object, or are moving;
+  target, stopped on an object, or are moving; ``keep_finger_samples(period)``
+  and ``take_finger_samples()`` keep it at every multiple of `period`, for the
+  2F-140's node as the wrench's samples are for the FT 300's;
 * the world: ``object_pose(name)``.
 
 Time is counted in whole timesteps (``time`` is their number times the
@@ -197,6 +199,8 @@ class Cell(object):
         self.wrench_sample_period = None
         self._wrench_samples, self._wrench_dropped = collections.deque(), 0
         self._sample_every, self._next_sample = None, 0  # 0: none kept (step() compares it with 1 and on)
+        self.finger_sample_period, self._finger_samples, self._finger_dropped = None, None, 0
+        self._next_finger_sample, self._next_finger_sample_time = 0, math.inf
 
         # -- the 2F-140
         self.gripper = None
@@ -431,6 +435,8 @@ class Cell(object):
             self._finger_segment, self._finger_ramping = segment, ramping
         if following:
             self._reference_view[:] = self._next_reference_view
+        if self._finger_samples is not None and count * timestep >= self._next_finger_sample_time:
+            self._keep_finger_samples()
         return steps
 
     def _offset_per_torque(self, steps):
@@ -574,6 +580,45 @@ class Cell(object):
         samples.append((count * self.timestep, (-fx, -fy, -fz, -tx, -ty, -tz)))
 
     # -- the 2F-140 ---------------------------------------------------------------
+
+    def keep_finger_samples(self, period, keep=2000):
+        """From now on, record finger() for every simulated time that is a whole multiple of `period` (s).
+
+        The 2F-140's node publishes its status once per period of simulated time, each the fingers as
+        they were then, however late its own process runs. A sample is taken after the step() that
+        reaches its time: the fingers at the end of that control cycle (2 or 8 ms), stamped with the
+        multiple. take_finger_samples() hands them over, as take_wrench_samples() does.
+        """
+        if self.gripper is None:
+            raise ValueError('the model has no 2F-140')
+        period = float(period)
+        if not (period > 0 and math.isfinite(period)):
+            raise ValueError('finger sample period %r s: a positive number of seconds' % (period,))
+        if int(keep) < 1:
+            raise ValueError('keep %r finger samples: at least one' % (keep,))
+        self.finger_sample_period = period
+        self._next_finger_sample = int(math.floor(self.time / period + 1e-9)) + 1
+        self._next_finger_sample_time = self._next_finger_sample * period - 1e-9
+        self._finger_samples, self._finger_dropped = collections.deque(maxlen=int(keep)), 0
+
+    def take_finger_samples(self):
+        """(samples, dropped): [(time, FingerState), ...] recorded since the last call, oldest first, and how
+        many of them the bound dropped."""
+        if self._finger_samples is None:
+            raise ValueError('the cell keeps no finger samples: call keep_finger_samples first')
+        samples, dropped = list(self._finger_samples), self._finger_dropped
+        self._finger_samples.clear()
+        self._finger_dropped = 0
+        return samples, dropped
+
+    def _keep_finger_samples(self):
+        state, samples, period = self.finger(), self._finger_samples, self.finger_sample_period
+        while self._next_finger_sample_time <= self.time:
+            if len(samples) == samples.maxlen:
+                self._finger_dropped += 1
+            samples.append((self._next_finger_sample * period, state))
+            self._next_finger_sample += 1
+            self._next_finger_sample_time = self._next_finger_sample * period - 1e-9
 
     def command_finger(self, opening, speed, force):
         """Move the pad gap to `opening` (m) at `speed` (m/s), squeezing with at most `force` (N)."""

@@ -36,6 +36,12 @@ Protocol: request and reply are tuples, one reply per request, in order.
                                        most 2000 wait (20 s at 10 ms); `dropped` counts the oldest
                                        lost beyond. A node started again receives what waited
                                        since its predecessor's last request: none lost or twice
+    ('finger_samples', period)      -> ('finger_samples', time, [(t, state), ...], dropped)
+                                       the fingers at every t that is a whole multiple of `period`
+                                       (s) since the last such request, as wrench_samples: what the
+                                       2F-140's node publishes, one status per period of simulated
+                                       time, however late its process asks; each the state at the
+                                       end of the control cycle that reached t
     ('finger', opening, speed, force) -> ('finger', time, state)
                                        command the fingers (m, m/s, N), then their state
     ('finger',)                     -> ('finger', time, state)     the state alone
@@ -64,7 +70,7 @@ import time
 from multiprocessing import AuthenticationError
 from multiprocessing.connection import Client, Listener
 
-VERSION = 2
+VERSION = 3
 # ur_robot_driver's node, which holds the cell with physics.
 ARM_NODE = 'ur_hardware_interface'
 FOLDER = 'ur3_ft_gripper_cell'
@@ -204,13 +210,19 @@ class CellServer(object):
                     cell.keep_wrench_samples(period)
                 samples, dropped = cell.take_wrench_samples()
                 return ('wrench_samples', cell.time, samples, dropped)
+            if name == 'finger_samples' and len(arguments) == 1:
+                period = float(arguments[0])
+                if cell.finger_sample_period != period:
+                    cell.keep_finger_samples(period)
+                samples, dropped = cell.take_finger_samples()
+                return ('finger_samples', cell.time, [(t, dict(vars(state))) for t, state in samples], dropped)
             if name == 'finger' and len(arguments) in (0, 3):
                 if arguments:
                     cell.command_finger(*(float(v) for v in arguments))
                 return ('finger', cell.time, dict(vars(cell.finger())))
             if name == 'truth' and not arguments:
                 return ('truth', cell.time, _truth(cell))
-        return ('error', 'unknown request %r: use hello, wrench, wrench_samples, finger or truth' % (request,))
+        return ('error', 'unknown request %r: use hello, wrench, wrench_samples, finger, finger_samples or truth' % (request,))
 
 
 def _truth(cell):
@@ -257,6 +269,11 @@ class CellClient(object):
         """(time, [(t, (fx, fy, fz, tx, ty, tz)), ...], dropped): the FT 300's readings at every multiple t
         of `period` since the last call (the first call starts the keeping), and how many were dropped."""
         return self._ask('wrench_samples', period)[1:]
+
+    def finger_samples(self, period):
+        """(time, [(t, state dict), ...], dropped): the fingers at every multiple t of `period` since the last
+        call (the first call starts the keeping), and how many were dropped."""
+        return self._ask('finger_samples', period)[1:]
 
     def finger(self, opening=None, speed=None, force=None):
         """(time, state dict); with opening, speed and force, the fingers are commanded first."""
