@@ -5,6 +5,7 @@ The rostest nodes, the pytest folders and bench/ import it as
 an AssertionError naming what did not happen: none falls through.
 """
 import os
+import random
 import signal
 import socket
 import subprocess
@@ -43,11 +44,29 @@ def pad_gap(buffer, fingers, prefix=''):
     return gripper_model.pad_gap(left, right, fingers.pad_thickness)
 
 
+# Below the kernel's ephemeral ports (32768 on) and the UR controller's (29999 to 30013), which the
+# simulated cells serve.
+FREE_PORTS = range(15000, 29000)
+
+
 def free_port():
-    """A TCP port nobody listens on now, e.g. for a rosmaster of one's own."""
-    with socket.socket() as s:
-        s.bind(('localhost', 0))
-        return s.getsockname()[1]
+    """A TCP port nobody listens on now, e.g. for a rosmaster of one's own.
+
+    Not one the kernel picks for bind(0): between this check and the master's
+    own bind, every ROS node that starts (this run's, or a second run's on the
+    same machine) takes such ports for its servers, and one took a master's
+    port once. A port from FREE_PORTS is taken only by a process that names it.
+    """
+    rng = random.SystemRandom()
+    for _ in range(1000):
+        port = rng.choice(FREE_PORTS)
+        with socket.socket() as s:
+            try:
+                s.bind(('', port))
+            except OSError:
+                continue
+            return port
+    raise AssertionError('no free TCP port in %d..%d' % (FREE_PORTS[0], FREE_PORTS[-1]))
 
 
 def master_pid(uri):
