@@ -216,10 +216,14 @@ class HeadlessView(object):
         self._log.flush()
         with open(self.log_path) as f:
             f.seek(self._log_start)
-            died = NODE_DIED.findall(f.read())
+            output = f.read()
+        died = NODE_DIED.findall(output)
         if died:
             raise RvizCrashed('RViz died at start-up (signal %d), see %s' % (-int(died[-1]), self.log_path))
-        raise ViewError('roslaunch exited (status %d) %s, see %s' % (self._launch.returncode, when, self.log_path))
+        # roslaunch's own reason is its last line (a taken master port, a bad argument...).
+        last = ([line.strip() for line in output.splitlines() if line.strip()] or ['no output'])[-1]
+        raise ViewError('roslaunch exited (status %d) %s: "%s", see %s'
+                        % (self._launch.returncode, when, last, self.log_path))
 
     def _start_xvfb(self):
         # -displayfd: Xvfb picks a free display itself and writes its number
