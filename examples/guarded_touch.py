@@ -44,12 +44,13 @@ class GuardedTouch(object):
     def tool_height(self):
         return float(self.tool.tool_pose(self.arm.joint_positions())[2, 3])
 
-    def start(self, x, y):
-        """Above the table with the gripper open, on the twist controller, the sensor zeroed."""
+    def start(self, x, y, height=START_HEIGHT):
+        """`height` (m, gripper_tcp's) above the table with the gripper open, on the twist controller, the
+        sensor zeroed."""
         if self.gripper.status.gSTA != 3:
             self.gripper.activate()
         self.gripper.go(0)
-        self.arm.move_along(self.tool.path_to(self.arm.joint_positions(), x, y, START_HEIGHT, CLEAR_HEIGHT))
+        self.arm.move_along(self.tool.path_to(self.arm.joint_positions(), x, y, height, CLEAR_HEIGHT))
         self.arm.only('twist_controller', [clients.TRAJECTORY_CONTROLLER])
         self.rospy.sleep(0.5)
         self.sensor.zero()
