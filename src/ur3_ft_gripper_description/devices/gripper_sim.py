@@ -202,14 +202,15 @@ class PhysicsFingers(object):
     def _kept_at(self, at, tolerance=1e-6):
         """The state the cell kept for time `at` (none from before the last command); the state now if the cell
         has not reached `at` yet (it is at most a control cycle behind this node's clock)."""
-        waiting = self._waiting
+        waiting, now = self._waiting, None
         if not waiting or waiting[-1][0] < at - tolerance:
-            waiting.extend(self.client.finger_samples(self.sample_period)[1])
+            _, samples, _, now = self.client.finger_samples(self.sample_period)
+            waiting.extend(samples)
         while waiting and (waiting[0][0] < at - tolerance or waiting[0][0] < self._commanded_at):
             waiting.popleft()
         if waiting:
             return waiting.popleft()[1] if waiting[0][0] <= at + tolerance else waiting[0][1]
-        return self.client.finger()[1]
+        return now if now is not None else self.client.finger()[1]
 
     def squeeze(self):
         # Asked while the register machine holds an object: the drive's force, also while a held part

@@ -36,12 +36,13 @@ Protocol: request and reply are tuples, one reply per request, in order.
                                        most 2000 wait (20 s at 10 ms); `dropped` counts the oldest
                                        lost beyond. A node started again receives what waited
                                        since its predecessor's last request: none lost or twice
-    ('finger_samples', period)      -> ('finger_samples', time, [(t, state), ...], dropped)
+    ('finger_samples', period)      -> ('finger_samples', time, [(t, state), ...], dropped, state)
                                        the fingers at every t that is a whole multiple of `period`
                                        (s) since the last such request, as wrench_samples: what the
                                        2F-140's node publishes, one status per period of simulated
                                        time, however late its process asks; each the state at the
-                                       end of the control cycle that reached t
+                                       end of the control cycle that reached t; and the state now,
+                                       for a node whose clock is ahead of the cell's last cycle
     ('finger', opening, speed, force) -> ('finger', time, state)
                                        command the fingers (m, m/s, N), then their state
     ('finger',)                     -> ('finger', time, state)     the state alone
@@ -215,7 +216,8 @@ class CellServer(object):
                 if cell.finger_sample_period != period:
                     cell.keep_finger_samples(period)
                 samples, dropped = cell.take_finger_samples()
-                return ('finger_samples', cell.time, [(t, dict(vars(state))) for t, state in samples], dropped)
+                return ('finger_samples', cell.time, [(t, dict(vars(state))) for t, state in samples], dropped,
+                        dict(vars(cell.finger())))
             if name == 'finger' and len(arguments) in (0, 3):
                 if arguments:
                     cell.command_finger(*(float(v) for v in arguments))
@@ -271,8 +273,8 @@ class CellClient(object):
         return self._ask('wrench_samples', period)[1:]
 
     def finger_samples(self, period):
-        """(time, [(t, state dict), ...], dropped): the fingers at every multiple t of `period` since the last
-        call (the first call starts the keeping), and how many were dropped."""
+        """(time, [(t, state dict), ...], dropped, state dict): the fingers at every multiple t of `period`
+        since the last call (the first call starts the keeping), how many were dropped, and the state now."""
         return self._ask('finger_samples', period)[1:]
 
     def finger(self, opening=None, speed=None, force=None):
