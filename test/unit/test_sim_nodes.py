@@ -532,3 +532,40 @@ def test_on_the_simulated_clock_a_readings_noise_is_fixed_by_its_time():
     forces = np.array(forward)[:, :3] - true[:3]
     assert np.allclose(forces.std(axis=0), settings.noise_force, rtol=0.15)  # still the datasheet's noise
     assert one.read(true, 1000) != one.read(true, 1001)
+
+
+class ScriptedCellLink(object):
+    """The cell's side of the link as PhysicsFingers asks it, with the cell's time, fingers and kept samples
+    set by the test: the order of events on the simulated clock, which a stepping cell leaves to chance."""
+
+    info = {'gripper': {'min_opening': 0.0, 'max_opening': 0.1285, 'grip_force_range': (10.0, 125.0)}}
+
+    def __init__(self):
+        self.time, self.kept = 0.0, []
+        self.state = dict(opening=0.1285, target=0.1285, motion=gripper_sim.AT_TARGET, grip_force=0.0)
+
+    def finger(self, opening=None, speed=None, force=None):
+        if opening is not None:
+            self.state = dict(self.state, target=opening, motion=gripper_sim.MOVING)
+        return self.time, dict(self.state)
+
+    def finger_samples(self, period):
+        kept, self.kept = self.kept, []
+        return self.time, kept, 0, dict(self.state)
+
+
+def test_a_status_due_at_the_commands_own_time_does_not_take_the_fingers_from_before_it():
+    """The cell keeps the fingers at the end of the cycle that reaches a status's time; a command that
+    arrives then follows that sample. The sample shows the fingers standing at the last target: taken as
+    the new command's, a close would read as arrived (gOBJ 3 at the closed end) before it began."""
+    spec = gripper_sim.spec_from_params(lambda name, default=None: default)
+    cell = ScriptedCellLink()
+    fingers = gripper_sim.PhysicsFingers(cell, spec, sample_period=0.02)
+    cell.time = 0.04
+    cell.kept = [(0.02, dict(cell.state)), (0.04, dict(cell.state))]  # open, at the open target
+    fingers.go(spec.gpo_closed, spec.speed_counts(255), 1.0)  # at 0.04, after the cycle's sample
+    assert fingers.advance(0.02, 0.04) == gripper_sim.MOVING
+    cell.time = 0.06
+    cell.kept = [(0.06, dict(cell.state, opening=0.12))]
+    assert fingers.advance(0.02, 0.06) == gripper_sim.MOVING
+    assert fingers.position == pytest.approx(spec.scale.position(0.12))

@@ -99,6 +99,9 @@ class GripperSpec(object):
         return metres * self.scale.counts_per_metre
 
 
+# Two simulated times this close (s) are one: the cell's are whole timesteps, the node's whole periods.
+SAME_TIME = 1e-6
+
 # What the fingers are doing, as the seam reports it (the physics cell's own words).
 MOVING, AT_TARGET, ON_OBJECT = 'moving', 'at_target', 'on_object'
 
@@ -195,18 +198,21 @@ class PhysicsFingers(object):
     def advance(self, dt, at=None):
         if at is None or self.sample_period is None:
             return self._show(self.client.finger()[1])
-        if at < self._commanded_at:
+        if at <= self._commanded_at + SAME_TIME:
             return self.motion  # a status due before the last command, served late: the command's own
         return self._show(self._kept_at(at))
 
-    def _kept_at(self, at, tolerance=1e-6):
+    def _kept_at(self, at, tolerance=SAME_TIME):
         """The state the cell kept for time `at` (none from before the last command); the state now if the cell
-        has not reached `at` yet (it is at most a control cycle behind this node's clock)."""
+        has not reached `at` yet (it is at most a control cycle behind this node's clock).
+
+        A sample stamped with the command's own time was taken before it, at the end of the cycle that the
+        command followed: it shows the fingers at the last target, and would read as having arrived."""
         waiting, now = self._waiting, None
         if not waiting or waiting[-1][0] < at - tolerance:
             _, samples, _, now = self.client.finger_samples(self.sample_period)
             waiting.extend(samples)
-        while waiting and (waiting[0][0] < at - tolerance or waiting[0][0] < self._commanded_at):
+        while waiting and (waiting[0][0] < at - tolerance or waiting[0][0] <= self._commanded_at + tolerance):
             waiting.popleft()
         if waiting:
             return waiting.popleft()[1] if waiting[0][0] <= at + tolerance else waiting[0][1]
