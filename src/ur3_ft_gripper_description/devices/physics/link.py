@@ -224,7 +224,8 @@ class CellServer(object):
                 return ('finger', cell.time, dict(vars(cell.finger())))
             if name == 'truth' and not arguments:
                 return ('truth', cell.time, _truth(cell))
-        return ('error', 'unknown request %r: use hello, wrench, wrench_samples, finger, finger_samples or truth' % (request,))
+        return ('error', 'unknown request %r: use hello, wrench, wrench_samples, finger, finger_samples or truth'
+                % (request,))
 
 
 def _truth(cell):
