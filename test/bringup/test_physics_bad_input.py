@@ -63,9 +63,12 @@ objects:
 
 
 def one_line(output, words):
+    """The one line of roslaunch's `output` holding all `words`; the failure leads with what went wrong
+    (CI logs keep the start of a message), then the output's end."""
     lines = [line for line in output.splitlines() if all(word in line for word in words)]
-    assert len(lines) == 1, output[-4000:]
-    assert 'Traceback' not in output, output[-4000:]
+    assert len(lines) == 1, '%d lines hold %r (want 1): %r; the output ends: %s' % (
+        len(lines), words, lines, output[-4000:])
+    assert 'Traceback' not in output, 'a traceback: %s' % output[output.index('Traceback'):][:4000]
     return lines[0]
 
 

@@ -16,6 +16,7 @@ taken) ends it with one line naming the problem and the fix.
 
 import argparse
 import os
+import signal
 import sys
 import threading
 import time
@@ -129,6 +130,8 @@ def main(argv=None):
     if not listen.is_loopback(args.robot_ip):
         say('the interfaces listen on %s, beyond this machine' % args.robot_ip)
     stop = threading.Event()
+    # Its script ends it quietly on Ctrl-C while it starts; from here Ctrl-C closes the faces first.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
         run(core, faces, lock, stop)
     except KeyboardInterrupt:
