@@ -26,6 +26,7 @@ succeed when the answer matches what it expects.
 import collections
 import re
 
+from . import dashboard_commands
 from .registers import Registers
 
 
@@ -107,6 +108,9 @@ class RobotState(object):
         self.registers = Registers()  # shared by programs and RTDE clients
         self.log = collections.deque(maxlen=LOG_ENTRIES)
         self.popup = None
+        self.dashboard_commands = dashboard_commands.read()
+        self.user_role = 'NONE'  # CB3: no user role restriction
+        self.operational_mode = None  # e-Series: PolyScope's, not set over the dashboard
         self._target = None        # robot mode a transition is heading for
         self._timer = 0.0
         self._stopped_for = 0.0    # s since the protective stop
@@ -250,107 +254,143 @@ class RobotState(object):
     # -- the dashboard server ----------------------------------------------------
 
     def dashboard(self, command):
-        """The dashboard server's answer to one command line."""
+        """The dashboard server's answer to one command line.
+
+        The table (config/ur_dashboard.yaml) says which commands this software answers and their fixed
+        replies; a command's method here (_dashboard_ and its words) does what it does to the robot and
+        answers, or returns None for the table's reply.
+        """
         command = command.strip()
-        words = command.lower().split()
-        key = ' '.join(words)
-        if key == 'power on':
-            if self.robot_mode == POWER_OFF:
-                self._head_for(IDLE)
-            return 'Powering on'
-        if key == 'power off':
-            self.power_off_quietly()
-            return 'Powering off'
-        if key == 'brake release':
-            self._head_for(RUNNING)
-            return 'Brake releasing'
-        if key == 'play':
-            if self.safety_mode != SAFETY_NORMAL:
-                return 'Failed to execute: play'
-            if self.robot_mode == RUNNING and self.program_state == PAUSED:
-                self.program_state = PLAYING  # resumes the paused program, e.g. headless mode's script
-                return 'Starting program'
-            if self.robot_mode != RUNNING or self.loaded_program is None:
-                return 'Failed to execute: play'
-            self.program_state = PLAYING
-            self.external_control_running = self.loaded_program == EXTERNAL_CONTROL
+        key, argument = self.dashboard_commands.match(command)
+        if key is None or not self.dashboard_commands.answered(key, self.software):
+            return "could not understand: '%s'" % command
+        act = getattr(self, '_dashboard_' + key.replace(' ', '_'), None)
+        answer = act(argument) if act is not None else None
+        return self.dashboard_commands.reply(key) if answer is None else answer
+
+    def _dashboard_power_on(self, argument):
+        if self.robot_mode == POWER_OFF:
+            self._head_for(IDLE)
+
+    def _dashboard_power_off(self, argument):
+        self.power_off_quietly()
+
+    def _dashboard_brake_release(self, argument):
+        self._head_for(RUNNING)
+
+    def _dashboard_play(self, argument):
+        if self.safety_mode != SAFETY_NORMAL:
+            return 'Failed to execute: play'
+        if self.robot_mode == RUNNING and self.program_state == PAUSED:
+            self.program_state = PLAYING  # resumes the paused program, e.g. headless mode's script
             return 'Starting program'
-        if key == 'stop':
-            if self.program_state == STOPPED:
-                return 'Failed to execute: stop'
-            self._end_program()
-            return 'Stopped'
-        if key == 'pause':
-            if self.program_state != PLAYING:
-                return 'Failed to execute: pause'
-            self.program_state = PAUSED
-            return 'Pausing program'
-        if key == 'unlock protective stop':
-            if self.safety_mode == PROTECTIVE_STOP:
-                if self._stopped_for < UNLOCK_DELAY:
-                    return UNLOCK_TOO_EARLY
-                self.safety_mode = SAFETY_NORMAL
-            return 'Protective stop releasing'
-        if key == 'restart safety':
+        if self.robot_mode != RUNNING or self.loaded_program is None:
+            return 'Failed to execute: play'
+        self.program_state = PLAYING
+        self.external_control_running = self.loaded_program == EXTERNAL_CONTROL
+        return 'Starting program'
+
+    def _dashboard_stop(self, argument):
+        if self.program_state == STOPPED:
+            return 'Failed to execute: stop'
+        self._end_program()
+        return 'Stopped'
+
+    def _dashboard_pause(self, argument):
+        if self.program_state != PLAYING:
+            return 'Failed to execute: pause'
+        self.program_state = PAUSED
+        return 'Pausing program'
+
+    def _dashboard_unlock_protective_stop(self, argument):
+        if self.safety_mode == PROTECTIVE_STOP:
+            if self._stopped_for < UNLOCK_DELAY:
+                return UNLOCK_TOO_EARLY
             self.safety_mode = SAFETY_NORMAL
-            self._end_program()
-            self.robot_mode = POWER_OFF
-            return 'Restarting safety'
-        if key == 'close popup':
-            self.popup = None
-            return 'closing popup'
-        if key == 'close safety popup':
-            return 'closing safety popup'
-        if key == 'robotmode':
-            return 'Robotmode: %s' % self.robot_mode
-        if key == 'safetymode':
-            return 'Safetymode: %s' % self.safety_mode
-        if key == 'safetystatus':  # CB3 3.11 and e-Series 5.4 on: the safety mode under its newer name
-            return 'Safetystatus: %s' % self.safety_mode
-        if key == 'running':
-            return 'Program running: %s' % ('true' if self.program_state == PLAYING else 'false')
-        if key == 'programstate':
-            return '%s %s' % (self.program_state, self.loaded_program or '<unnamed>')
-        if key == 'get loaded program':
-            return 'Loaded program: %s' % self.loaded_program if self.loaded_program else 'No program loaded'
-        if key == 'isprogramsaved':
-            return 'true %s' % (self.loaded_program or '<unnamed>')
-        if key == 'is in remote control':
-            # An e-Series command; remote control is always on in the simulation.
-            return 'true' if self.software.e_series else "could not understand: '%s'" % command
-        if key == 'clear operational mode':
-            return "No longer controlling the operational mode. Current operational mode: 'AUTOMATIC'."
-        if key == 'quit':
-            return 'Disconnected'
-        if key == 'shutdown':
-            self.power_off_quietly()
-            return 'Shutting down'
-        if key == 'get serial number':  # CB3 3.12 and e-Series 5.6 on
-            return self.software.serial_number
-        if key == 'get robot model':  # CB3 3.12 and e-Series 5.6 on
-            return self.software.model_name
-        if key == 'polyscopeversion':
-            return 'URSoftware %s' % self.software.version_text
-        if words[:2] == ['load', 'installation']:
-            name = command.split(None, 2)[2] if len(words) > 2 else ''
-            return 'Loading installation: %s' % name if name else 'File not found: '
-        if words[:1] == ['load']:
-            name = command.split(None, 1)[1] if len(words) > 1 else ''
-            if name not in self.programs and name.split('/')[-1] not in self.programs:
-                return 'File not found: %s' % name
-            self._end_program()
-            self.loaded_program = name.split('/')[-1]
-            return 'Loading program: %s' % name
-        if words[:1] == ['addtolog']:
-            message = command[len('addToLog'):].strip()
-            if not message:
-                return 'No log message to add'
-            self.add_log(message)
-            return 'Added log message'
-        if words[:1] == ['popup']:
-            self.popup = command[len('popup'):].strip()
-            return 'showing popup'
-        return "could not understand: '%s'" % command
+
+    def _dashboard_restart_safety(self, argument):
+        self.safety_mode = SAFETY_NORMAL
+        self._end_program()
+        self.robot_mode = POWER_OFF
+
+    def _dashboard_close_popup(self, argument):
+        self.popup = None
+
+    def _dashboard_shutdown(self, argument):
+        self.power_off_quietly()
+
+    def _dashboard_robotmode(self, argument):
+        return 'Robotmode: %s' % self.robot_mode
+
+    def _dashboard_safetymode(self, argument):
+        return 'Safetymode: %s' % self.safety_mode
+
+    def _dashboard_safetystatus(self, argument):  # the safety mode under its newer name
+        return 'Safetystatus: %s' % self.safety_mode
+
+    def _dashboard_running(self, argument):
+        return 'Program running: %s' % ('true' if self.program_state == PLAYING else 'false')
+
+    def _dashboard_programstate(self, argument):
+        return '%s %s' % (self.program_state, self.loaded_program or '<unnamed>')
+
+    def _dashboard_get_loaded_program(self, argument):
+        return 'Loaded program: %s' % self.loaded_program if self.loaded_program else 'No program loaded'
+
+    def _dashboard_isprogramsaved(self, argument):
+        return 'true %s' % (self.loaded_program or '<unnamed>')
+
+    def _dashboard_is_in_remote_control(self, argument):
+        return 'true'  # remote control is always on in the simulation
+
+    def _dashboard_get_serial_number(self, argument):
+        return self.software.serial_number
+
+    def _dashboard_get_robot_model(self, argument):
+        return self.software.model_name
+
+    def _dashboard_polyscopeversion(self, argument):
+        return 'URSoftware %s' % self.software.version_text
+
+    def _dashboard_load_installation(self, argument):
+        return 'Loading installation: %s' % argument if argument else 'File not found: '
+
+    def _dashboard_load(self, argument):
+        if argument not in self.programs and argument.split('/')[-1] not in self.programs:
+            return 'File not found: %s' % argument
+        self._end_program()
+        self.loaded_program = argument.split('/')[-1]
+        return 'Loading program: %s' % argument
+
+    def _dashboard_addtolog(self, argument):
+        if not argument:
+            return 'No log message to add'
+        self.add_log(argument)
+        return 'Added log message'
+
+    def _dashboard_popup(self, argument):
+        self.popup = argument
+
+    def _dashboard_setuserrole(self, argument):
+        if argument.upper() not in self.dashboard_commands.user_roles:
+            return "could not understand: 'setUserRole %s'" % argument
+        self.user_role = argument.upper()
+        return 'Setting user role: %s' % argument
+
+    def _dashboard_getuserrole(self, argument):
+        return self.user_role
+
+    def _dashboard_set_operational_mode(self, argument):
+        if argument.upper() not in self.dashboard_commands.operational_modes:
+            return "could not understand: 'set operational mode %s'" % argument
+        self.operational_mode = argument.upper()
+        return "Operational mode '%s' is set" % argument
+
+    def _dashboard_clear_operational_mode(self, argument):
+        self.operational_mode = None
+
+    def _dashboard_get_operational_mode(self, argument):
+        return self.operational_mode or 'NONE'  # NONE: no operational mode password, as in URSim
 
     def power_off_quietly(self):
         self._end_program()
