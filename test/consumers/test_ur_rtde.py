@@ -8,8 +8,9 @@ the primary interface and commands it through RTDE's registers. What they read i
 truths: the start pose the launch gave, the TCP pose pinocchio computes for those joints from the exported
 model, the robot mode the dashboard asked for, the speed slider the IO client set, the joints a movej was
 given and the least time its profile allows, a straight line for movel, the speeds speedj and speedl asked
-for, the last target of a servoj stream, a watchdog's period. Times are the controller's own (RTDE's timestamp), not the wall clock's, except to wait
-for the node to come up.
+for, the last target of a servoj stream, a watchdog's period, and on physics the force a forceMode press
+applies as the robot's own wrench and the FT 300 (rq_sensor's topic on the cell's master) read it. Times
+are the controller's own (RTDE's timestamp), not the wall clock's, except to wait for the node to come up.
 """
 import math
 import os
@@ -59,6 +60,8 @@ def ur_type(request):
 
 # Each cell's output (roslaunch and its nodes), by address: a file, so that a full pipe never blocks a node.
 CELL_LOGS = {}
+# Each cell's ROS master, by address: the FT 300 is read on its ROS face, as rq_sensor serves it.
+CELL_MASTERS = {}
 
 
 def cell_log(address, lines=30):
@@ -74,6 +77,7 @@ def bring_up(ur_type, log_dir, *arguments):
     master = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % master)
     CELL_LOGS[address] = str(log_dir / ('cell-%s.log' % address))
+    CELL_MASTERS[address] = env['ROS_MASTER_URI']
     with open(CELL_LOGS[address], 'w') as output:
         node = subprocess.Popen(['roslaunch', '-p', str(master), 'ur3_ft_gripper_description',
                                  'ur_ft_gripper_bringup.launch', 'ur_type:=' + ur_type, 'sim:=true',
@@ -286,6 +290,7 @@ def test_the_watchdog_stops_the_program_one_period_after_the_last_kick(control, 
 PRESS_XY, PRESS_HEIGHT = (0.2986, 0.1123), 0.06
 PRESS_FORCES = (10.0, 20.0, 40.0)
 SETTLE, MEASURE = 2.5, 1.0  # s of the controller's time: pressing before the force is read, and reading
+FT300_RATE = 100.0  # Hz: rq_sensor's stream
 
 
 @pytest.fixture(scope='module')
@@ -303,7 +308,51 @@ def gripper_tcp(ur_type):
     return list(offset.translation) + list(pinocchio.log3(offset.rotation))
 
 
-def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_ip):
+def ros_tool(address, *command, **popen):
+    """A ROS command-line tool (rosservice, rostopic) against the cell at `address`'s master."""
+    env = dict(os.environ, ROS_MASTER_URI=CELL_MASTERS[address], PYTHONUNBUFFERED='1')
+    return subprocess.Popen(list(command), env=env, universal_newlines=True, **popen)
+
+
+def zero_ft300(address):
+    """rq_sensor's SET_ZERO (command_id 8) on robotiq_ft_sensor_acc, as users call it."""
+    call = ros_tool(address, 'rosservice', 'call', '/robotiq_ft_sensor_acc', '8', '', stdout=subprocess.PIPE,
+                    stderr=subprocess.STDOUT)
+    output = call.communicate(timeout=COME_UP)[0]
+    assert call.returncode == 0 and 'success: True' in output, output
+
+
+class FT300Recording(object):
+    """robotiq_ft_wrench as `rostopic echo -p` prints it (stamp and force), from start() until stop(until=)."""
+
+    def __init__(self, address, path):
+        self.address, self.path = address, str(path)
+
+    def start(self):
+        self.output = open(self.path, 'w')
+        self.process = ros_tool(self.address, 'rostopic', 'echo', '-p', '/robotiq_ft_wrench', stdout=self.output,
+                                stderr=subprocess.STDOUT)
+
+    def readings(self):
+        """[(stamp s, fx, fy, fz)] printed so far."""
+        with open(self.path) as lines:
+            rows = [line.split(',') for line in lines if line[:1].isdigit()]
+        return [(int(row[2]) * 1e-9, float(row[4]), float(row[5]), float(row[6])) for row in rows if len(row) > 9]
+
+    def stop(self, until):
+        """The readings up to simulated time `until`, once rostopic has printed them (it trails the cell)."""
+        deadline = time.monotonic() + COME_UP
+        while not any(stamp >= until for stamp, *_ in self.readings()):
+            assert self.process.poll() is None and time.monotonic() < deadline, \
+                'robotiq_ft_wrench did not reach %.3f s: %s' % (until, open(self.path).read()[-2000:])
+            time.sleep(0.1)
+        self.process.terminate()
+        self.process.wait(timeout=30)
+        self.output.close()
+        return self.readings()
+
+
+def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_ip, tmp_path):
     receive = rtde_receive.RTDEReceiveInterface(physics_ip)
     control = rtde_control.RTDEControlInterface(physics_ip)
     try:
@@ -314,6 +363,9 @@ def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_i
         seen = []
         for force in PRESS_FORCES:
             assert control.zeroFtSensor()
+            zero_ft300(physics_ip)
+            ft300 = FT300Recording(physics_ip, tmp_path / ('ft300-%g.csv' % force))
+            ft300.start()
             frame = receive.getActualTCPPose()
             started, readings = receive.getTimestamp(), []
             while receive.getTimestamp() < started + SETTLE + MEASURE:
@@ -324,11 +376,18 @@ def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_i
                 if receive.getTimestamp() >= started + SETTLE:
                     readings.append(receive.getActualTCPForce())
                 control.waitPeriod(period)
+            # The FT 300's stamps are the cell's simulated time, which RTDE's timestamp counts too.
+            window = (started + SETTLE, started + SETTLE + MEASURE)
+            sensed = [r[1:] for r in ft300.stop(until=window[1]) if window[0] <= r[0] <= window[1]]
             assert control.forceModeStop()
-            mean = np.mean(readings, axis=0)
-            seen.append('%g N: robot wrench %s' % (force, np.round(mean, 2)))
-            # The table pushes the tool up with the force the robot applies down.
+            mean, sensed_mean = np.mean(readings, axis=0), np.mean(sensed, axis=0)
+            seen.append('%g N: robot wrench %s, FT 300 force %s (%d readings)' % (
+                force, np.round(mean, 2), np.round(sensed_mean, 2), len(sensed)))
+            # The table pushes the tool up with the force the robot applies down. The FT 300, zeroed in the
+            # air, reads the table's push along its z (the tool's), against it: -force.
             assert mean[2] == pytest.approx(force, abs=max(0.05 * force, 0.5)), seen
+            assert len(sensed) >= 0.9 * MEASURE * FT300_RATE, seen
+            assert sensed_mean[2] == pytest.approx(-force, abs=max(0.05 * force, 0.5)), seen
             assert control.moveJ_IK(above, 1.0, 1.0)
     finally:
         control.stopScript()
