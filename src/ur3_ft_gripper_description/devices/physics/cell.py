@@ -96,6 +96,28 @@ class FingerState(object):
         return 'FingerState(%s)' % ', '.join('%s=%r' % item for item in sorted(self.__dict__.items()))
 
 
+class WaitingSamples(object):
+    """Samples kept for a reader that takes them in batches: at most `keep` wait, and beyond that the oldest
+    are dropped and counted, so a reader that stalls costs bounded memory and learns what it missed."""
+
+    def __init__(self, keep, what):
+        if int(keep) < 1:
+            raise ValueError('keep %r %s samples: at least one' % (keep, what))
+        self._samples, self._dropped = collections.deque(maxlen=int(keep)), 0
+
+    def append(self, sample):
+        if len(self._samples) == self._samples.maxlen:
+            self._dropped += 1
+        self._samples.append(sample)
+
+    def take(self):
+        """(samples, dropped): those kept since the last take, oldest first, and how many the bound dropped."""
+        samples, dropped = list(self._samples), self._dropped
+        self._samples.clear()
+        self._dropped = 0
+        return samples, dropped
+
+
 class Cell(object):
     """The robot of `mjcf_path` (export_mjcf's file of the model `urdf_text`) in `world`."""
 
@@ -197,9 +219,9 @@ class Cell(object):
         self._flange_force = _sensor_slice(m, flange + mjcf.FORCE_SUFFIX)
         self._flange_torque = _sensor_slice(m, flange + mjcf.TORQUE_SUFFIX)
         self.wrench_sample_period = None
-        self._wrench_samples, self._wrench_dropped = collections.deque(), 0
+        self._wrench_samples = None
         self._sample_every, self._next_sample = None, 0  # 0: none kept (step() compares it with 1 and on)
-        self.finger_sample_period, self._finger_samples, self._finger_dropped = None, None, 0
+        self.finger_sample_period, self._finger_samples = None, None
         self._next_finger_sample, self._next_finger_sample_time = 0, math.inf
 
         # -- the 2F-140
@@ -552,11 +574,10 @@ class Cell(object):
         if every < 1 or abs(every * self.timestep - period) > 1e-9 * period:
             raise ValueError('wrench sample period %r s: not a whole number of timesteps of %r s'
                              % (period, self.timestep))
-        if int(keep) < 1:
-            raise ValueError('keep %r wrench samples: at least one' % (keep,))
+        samples = WaitingSamples(keep, 'wrench')
         self.wrench_sample_period, self._sample_every = period, every
         self._next_sample = (self._steps // every + 1) * every
-        self._wrench_samples, self._wrench_dropped = collections.deque(maxlen=int(keep)), 0
+        self._wrench_samples = samples
 
     def take_wrench_samples(self):
         """(samples, dropped): the samples recorded since the last call and how many of them the bound dropped.
@@ -564,20 +585,15 @@ class Cell(object):
         samples: [(time, (fx, fy, fz, tx, ty, tz)), ...], oldest first, time the timesteps taken times the
         timestep.
         """
-        if self.wrench_sample_period is None:
+        if self._wrench_samples is None:
             raise ValueError('the cell keeps no wrench samples: call keep_wrench_samples first')
-        samples, dropped = list(self._wrench_samples), self._wrench_dropped
-        self._wrench_samples.clear()
-        self._wrench_dropped = 0
-        return samples, dropped
+        return self._wrench_samples.take()
 
     def _keep_wrench_sample(self, count):
-        sensordata, samples = self._sensordata, self._wrench_samples
+        sensordata = self._sensordata
         fx, fy, fz = sensordata[self._force].tolist()
         tx, ty, tz = sensordata[self._torque].tolist()
-        if len(samples) == samples.maxlen:
-            self._wrench_dropped += 1
-        samples.append((count * self.timestep, (-fx, -fy, -fz, -tx, -ty, -tz)))
+        self._wrench_samples.append((count * self.timestep, (-fx, -fy, -fz, -tx, -ty, -tz)))
 
     # -- the 2F-140 ---------------------------------------------------------------
 
@@ -594,28 +610,22 @@ class Cell(object):
         period = float(period)
         if not (period > 0 and math.isfinite(period)):
             raise ValueError('finger sample period %r s: a positive number of seconds' % (period,))
-        if int(keep) < 1:
-            raise ValueError('keep %r finger samples: at least one' % (keep,))
+        samples = WaitingSamples(keep, 'finger')
         self.finger_sample_period = period
         self._next_finger_sample = int(math.floor(self.time / period + 1e-9)) + 1
         self._next_finger_sample_time = self._next_finger_sample * period - 1e-9
-        self._finger_samples, self._finger_dropped = collections.deque(maxlen=int(keep)), 0
+        self._finger_samples = samples
 
     def take_finger_samples(self):
         """(samples, dropped): [(time, FingerState), ...] recorded since the last call, oldest first, and how
         many of them the bound dropped."""
         if self._finger_samples is None:
             raise ValueError('the cell keeps no finger samples: call keep_finger_samples first')
-        samples, dropped = list(self._finger_samples), self._finger_dropped
-        self._finger_samples.clear()
-        self._finger_dropped = 0
-        return samples, dropped
+        return self._finger_samples.take()
 
     def _keep_finger_samples(self):
         state, samples, period = self.finger(), self._finger_samples, self.finger_sample_period
         while self._next_finger_sample_time <= self.time:
-            if len(samples) == samples.maxlen:
-                self._finger_dropped += 1
             samples.append((self._next_finger_sample * period, state))
             self._next_finger_sample += 1
             self._next_finger_sample_time = self._next_finger_sample * period - 1e-9
