@@ -52,6 +52,10 @@ above is the same for both:
   fingers stopping short of the request on an object, gCU follows the drive's
   force (max_grip_current at 125 N).
 
+With ``~urcap_address`` (the simulated robot's address), the registers are also
+served as Robotiq's gripper URCap serves them on the robot: SET and GET on a TCP
+socket (network/robotiq_urcap.py, port 63352), one register machine behind both.
+
 Its private parameters are declared in PARAMETERS below (their reference:
 doc/node_parameters.md).
 """
@@ -63,6 +67,7 @@ import time
 
 from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 from ur3_ft_gripper_description.devices.physics import link
+from ur3_ft_gripper_description.devices.network import listen, robotiq_urcap
 
 # A kind of nonsense register value is warned about at most once per this many seconds.
 RATE_LIMIT = 10.0
@@ -386,6 +391,9 @@ PARAMETERS = (
     sim_params.Param('~initial_position', sim_params.StartupDefault('the gripper\'s `gpo_open` in ~devices_file'),
                      'gPO at start-up, in reset as after a power-up; not with ~physics',
                      sim_params.number(minimum=0.0)),
+    sim_params.Param('~urcap_address', '', 'IPv4 address of the simulated robot, where the gripper URCap\'s socket '
+                     'listens (config/robotiq_2f_urcap.yaml\'s port, 63352): SET and GET on the same registers as '
+                     'this node\'s topics; empty: none'),
     sim_params.PHYSICS,
     sim_params.DEVICES_FILE,
 )
@@ -409,6 +417,16 @@ def settings_from_params(get_param):
         raise sim_params.ParamError('~initial_position=%r must be a position register value '
                                     '0..255' % (initial,))
     return spec, rate, width, initial
+
+
+def start_urcap_socket(address, gripper, lock, log, port=None):
+    """The gripper URCap's socket over `gripper` (a RegisterGripper) at `address`, serving in a thread of its own;
+    listen.ListenError (one line) when it cannot listen."""
+    table = robotiq_urcap.read_table()
+    server = robotiq_urcap.serve(listen.checked_address(address), robotiq_urcap.UrcapGripper(table, gripper, lock),
+                                 log, table['port'] if port is None else port)
+    threading.Thread(target=server.serve_forever, name='urcap socket', daemon=True).start()
+    return server
 
 
 def run(rospy):
@@ -443,7 +461,16 @@ def run(rospy):
     publisher = rospy.Publisher('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input,
                                 queue_size=256)
 
-    lock = threading.Lock()  # callbacks run in rospy's threads, the loop in this one
+    lock = threading.Lock()  # callbacks and the URCap socket's sessions run in threads of their own, the loop in this one
+    address = sim_params.read(rospy.get_param, PARAMETERS, '~urcap_address')
+    if address:
+        try:
+            server = start_urcap_socket(address, gripper, lock, rospy.logwarn)
+        except listen.ListenError as exc:
+            rospy.logfatal('gripper_sim: %s', exc)
+            return 1
+        rospy.on_shutdown(server.shutdown)
+        rospy.loginfo("gripper_sim: the gripper URCap's socket listens on %s:%d", *server.server_address[:2])
 
     def on_command(msg):
         with lock:
