@@ -9,7 +9,8 @@ truths: the start pose the launch gave, the TCP pose pinocchio computes for thos
 model, the robot mode the dashboard asked for, the speed slider the IO client set, the joints a movej was
 given and the least time its profile allows, a straight line for movel, the speeds speedj and speedl asked
 for, the last target of a servoj stream, a watchdog's period, and on physics the force a forceMode press
-applies as the robot's own wrench and the FT 300 (rq_sensor's topic on the cell's master) read it. Times
+applies as the robot's own wrench and the FT 300 (rq_sensor's topic on the cell's master) read it, and the
+block ur_rtde's moves and the gripper URCap's socket pick up, held at its width. Times
 are the controller's own (RTDE's timestamp), not the wall clock's, except to wait for the node to come up.
 """
 import math
@@ -22,6 +23,7 @@ import time
 import numpy as np
 import pinocchio
 import pytest
+import yaml
 import rtde_control
 import rtde_io
 import rtde_receive
@@ -390,6 +392,76 @@ def test_force_mode_presses_on_the_table_with_the_force_asked(ur_type, physics_i
             assert sensed_mean[2] == pytest.approx(-force, abs=max(0.05 * force, 0.5)), seen
             assert control.moveJ_IK(above, 1.0, 1.0)
     finally:
+        control.stopScript()
+        control.disconnect()
+        receive.disconnect()
+
+
+# -- ur_rtde with the gripper URCap's socket, on physics ---------------------------------------------------
+
+# The default world's block (config/worlds/default.yaml): 50 mm square, 120 mm tall, standing at (0.30, -0.15)
+# in base_link. Grasped 40 mm below its top, as examples/pick_and_weigh.py grasps.
+BLOCK_XY, BLOCK_WIDTH, BLOCK_TOP, GRASP_DEPTH = (0.30, -0.15), 0.05, 0.12, 0.04
+URCAP_PORT = 63352
+# MuJoCo's soft contacts: each pad sinks a little into the held object under the grip
+# (ur3_ft_gripper_testing.grasp, which this folder does not import).
+GAP_TOLERANCE = 0.001
+
+
+class UrcapGripper(object):
+    """The 2F-140 on Robotiq's gripper URCap socket, as ur_rtde's robotiq_gripper example speaks to it."""
+
+    def __init__(self, address):
+        self.socket = socket.create_connection((address, URCAP_PORT), timeout=10.0)
+
+    def set(self, **values):
+        self.socket.sendall(('SET' + ''.join(' %s %d' % item for item in values.items()) + '\n').encode('ascii'))
+        assert self.socket.recv(1024) == b'ack'
+
+    def get(self, name):
+        self.socket.sendall(('GET %s\n' % name).encode('ascii'))
+        reply_name, value = self.socket.recv(1024).decode('ascii').split()
+        assert reply_name == name
+        return int(value)
+
+    def close(self):
+        self.socket.close()
+
+
+def register_position(opening):
+    """gPO of a pad opening (m), by the unit's register scale in config/sim_devices.yaml."""
+    with open(os.path.join(os.path.dirname(__file__), '..', '..', 'config', 'sim_devices.yaml')) as stream:
+        unit = yaml.safe_load(stream)['gripper']
+    counts_per_metre = (unit['gpo_closed'] - unit['gpo_open']) / unit['stroke']
+    return unit['gpo_closed'] - opening * counts_per_metre, counts_per_metre
+
+
+def test_ur_rtde_and_the_gripper_urcap_socket_pick_up_the_block(ur_type, physics_ip):
+    receive = rtde_receive.RTDEReceiveInterface(physics_ip)
+    control = rtde_control.RTDEControlInterface(physics_ip)
+    gripper = UrcapGripper(physics_ip)
+    try:
+        # Activation as the example does it: reset, then ACT 1 until STA 3.
+        gripper.set(ACT=0, ATR=0)
+        gripper.set(ACT=1)
+        controller_wait(receive, lambda: gripper.get('STA') == 3, 5.0)
+        gripper.set(POS=0, SPE=255, FOR=100, GTO=1)
+        controller_wait(receive, lambda: gripper.get('OBJ') == 3, 5.0)  # open, at rest
+        assert control.setTcp(gripper_tcp(ur_type)), cell_log(physics_ip)
+        # The controller's base is base_link turned half a turn about z.
+        x, y = -BLOCK_XY[0], -BLOCK_XY[1]
+        above = [x, y, BLOCK_TOP + 0.08, 0.0, math.pi, 0.0]
+        assert control.moveJ_IK(above, 1.0, 1.0)
+        assert control.moveL([x, y, BLOCK_TOP - GRASP_DEPTH, 0.0, math.pi, 0.0], 0.1, 0.5)
+        gripper.set(POS=255, SPE=255, FOR=100, GTO=1)
+        controller_wait(receive, lambda: gripper.get('OBJ') != 0, 5.0)
+        held_at, counts_per_metre = register_position(BLOCK_WIDTH)
+        assert gripper.get('OBJ') == 2, 'the close did not stop on the block'  # stopped on an object, closing
+        assert abs(gripper.get('POS') - held_at) <= GAP_TOLERANCE * counts_per_metre + 0.5, gripper.get('POS')
+        assert control.moveL(above, 0.1, 0.5)
+        assert gripper.get('OBJ') == 2, 'the block slipped out while lifting'
+    finally:
+        gripper.close()
         control.stopScript()
         control.disconnect()
         receive.disconnect()

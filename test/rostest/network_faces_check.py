@@ -1,13 +1,15 @@
 #!/usr/bin/env python3
 """rostest node: the controller's network faces and ur_robot_driver's ROS interface drive one robot
 (network_faces.test): the Dashboard Server on 29999, with a client written from UR's Dashboard Server
-document, and RTDE on 30004, with the client written from UR's RTDE guide (ur3_ft_gripper_testing)."""
+document, and RTDE on 30004, with the client written from UR's RTDE guide (ur3_ft_gripper_testing); and the
+2F-140 on the gripper URCap's socket (63352) beside its Robotiq topics."""
 import socket
 import time
 import unittest
 
 import rospy
 import rostest
+from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 from rosgraph_msgs.msg import Log
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64, String
@@ -22,6 +24,7 @@ from ur3_ft_gripper_testing.rtde_client import RtdeClient
 PORT = 29999
 RTDE_PORT = 30004
 REALTIME_PORT = 30003
+URCAP_PORT = 63352  # Robotiq's gripper URCap, on the robot's address
 NODE = '/ur_hardware_interface'
 TARGET = [0.3, -1.4, 1.3, -1.5, -1.5, 0.4]
 
@@ -158,6 +161,41 @@ class NetworkFacesTest(unittest.TestCase):
         wait_for(lambda: max(abs(a - b) for a, b in zip(self.joint_states.latest().position, home)) < 1e-6,
                  'joint_states at the target of the program sent on 30003')
         realtime.close()
+
+    def test_8_the_gripper_urcap_socket_and_the_gripper_topics_are_one_gripper(self):
+        # As Robotiq's gripper URCap serves the 2F-140 on a robot's address: SET answered b"ack", GET "<VAR> <n>".
+        status = Recorder('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input)
+        command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output, queue_size=1)
+        urcap = wait_for(lambda: self.connect_to(URCAP_PORT), 'the gripper URCap socket on %s:%d'
+                         % (self.address, URCAP_PORT))
+
+        def get(name):
+            urcap.sendall(('GET %s\n' % name).encode('ascii'))
+            reply_name, value = urcap.recv(1024).decode('ascii').split()
+            self.assertEqual(reply_name, name)
+            return int(value)
+
+        urcap.sendall(b'SET ACT 1\n')
+        self.assertEqual(urcap.recv(1024), b'ack')
+        wait_for(lambda: status.latest() and status.latest().gSTA == 3, 'gSTA 3 on the topic after SET ACT 1')
+        self.assertEqual(get('STA'), 3)
+        urcap.sendall(b'SET POS 255 SPE 255 FOR 100 GTO 1\n')
+        self.assertEqual(urcap.recv(1024), b'ack')
+        wait_for(lambda: status.latest().gOBJ == 3 and status.latest().gPR == 255,
+                 'the topic to show the close the socket asked for, ended')
+        self.assertEqual(get('POS'), status.latest().gPO)
+        # And what the topic commands, the socket reads.
+        wait_for(lambda: command.get_num_connections() > 0, 'the gripper node to subscribe')
+        command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=40, rSP=200, rFR=50))
+        wait_for(lambda: get('PRE') == 40 and get('OBJ') == 3, "GET PRE 40 and OBJ 3 after the topic's command")
+        self.assertEqual((get('SPE'), get('FOR')), (200, 50))
+        urcap.close()
+
+    def connect_to(self, port):
+        try:
+            return socket.create_connection((self.address, port), timeout=TIMEOUT)
+        except OSError:
+            return None
 
 
 if __name__ == '__main__':
