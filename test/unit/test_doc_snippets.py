@@ -65,6 +65,9 @@ NOT_RUN_HERE = [
                                  'network_faces.test sends the same program to it'),
     ("printf 'robotmode", 'needs the simulated controller running with an address: test/rostest/'
                           'network_faces.test speaks the same protocol to it'),
+    ("printf 'SET ACT", 'needs the bring-up running with sim_robot_ip: test/rostest/network_faces.test speaks the '
+                        "gripper URCap's protocol to it"),
+    ("printf 'GET STA", 'the same'),
     ('rosrun robotiq_2f_gripper_control', "Robotiq's interactive tools, not built here (test/rostest/"
                                           "gripper_registers.test speaks their registers)"),
     ('rosrun ur3_ft_gripper_description pick_and_weigh.py', 'needs the cell on physics running: '
