@@ -14,23 +14,19 @@ the problem, no reply (as the gripper ignores what it cannot read), and the
 connection stays open.
 """
 
-import os
 import socketserver
 
 import yaml
 
+from ..sim_params import PackageFile
 from . import listen
 
 MAX_LINE = 1024  # longer than any command: SET with every variable
-
-
-def default_table_file():
-    from .. import sim_params
-    return os.path.join(sim_params.package_path(), 'config', 'robotiq_2f_urcap.yaml')
+TABLE_FILE = PackageFile('config/robotiq_2f_urcap.yaml')
 
 
 def read_table(path=None):
-    with open(path or default_table_file()) as stream:
+    with open(path or TABLE_FILE.path()) as stream:
         return yaml.safe_load(stream)
 
 
