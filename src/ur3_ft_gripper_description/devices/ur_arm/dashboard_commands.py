@@ -4,15 +4,11 @@ Which commands a controller answers depends on its generation and software
 version; a line is matched to the longest command its words begin with, in
 any case, and the rest of the line is the command's argument.
 """
-import os
-
 import yaml
 
-from .. import sim_params
+from ..sim_params import PackageFile
 
-
-def default_table_file():
-    return os.path.join(sim_params.package_path(), 'config', 'ur_dashboard.yaml')
+TABLE_FILE = PackageFile('config/ur_dashboard.yaml')
 
 
 def _version(text):
@@ -53,7 +49,7 @@ _CACHE = {}
 
 def read(path=None):
     """The DashboardCommands of the table at `path` (default: the package's), read once per path."""
-    path = path or default_table_file()
+    path = path or TABLE_FILE.path()
     if path not in _CACHE:
         with open(path) as stream:
             _CACHE[path] = DashboardCommands(yaml.safe_load(stream))
