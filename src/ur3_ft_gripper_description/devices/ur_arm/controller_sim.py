@@ -124,15 +124,17 @@ def main(argv=None):
     except ControllerError as error:
         say(str(error))
         return 1
-    faces.start()
-    for server in faces.servers:
-        say('%s on %s:%d' % (server.name, *server.server_address[:2]))
-    if not listen.is_loopback(args.robot_ip):
-        say('the interfaces listen on %s, beyond this machine' % args.robot_ip)
     stop = threading.Event()
-    # Its script ends it quietly on Ctrl-C while it starts; from here Ctrl-C closes the faces first.
-    signal.signal(signal.SIGINT, signal.default_int_handler)
     try:
+        # Its script ends it quietly on Ctrl-C while it starts. From here, before it says where the faces
+        # listen, Ctrl-C closes them and it exits 0: whoever saw them announced and interrupts it (a
+        # supervisor, a test) gets that, whenever the interrupt comes.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        faces.start()
+        for server in faces.servers:
+            say('%s on %s:%d' % (server.name, *server.server_address[:2]))
+        if not listen.is_loopback(args.robot_ip):
+            say('the interfaces listen on %s, beyond this machine' % args.robot_ip)
         run(core, faces, lock, stop)
     except KeyboardInterrupt:
         pass
