@@ -48,6 +48,9 @@ UNLOCK_TOO_EARLY = ('Cannot unlock protective stop until 5s after occurrence. Al
 LOG_ENTRIES = 1000
 LOG_ENTRY_CHARACTERS = 1000
 
+# A dashboard command's answer when its argument is not one the robot knows: the robot's "could not understand".
+_NOT_UNDERSTOOD = object()
+
 # What ur_robot_driver's dashboard services send, and the answer each expects for success.
 DASHBOARD_TRIGGERS = {
     'power_on': ('power on', r'Powering on'),
@@ -266,7 +269,13 @@ class RobotState(object):
             return "could not understand: '%s'" % command
         act = getattr(self, '_dashboard_' + key.replace(' ', '_'), None)
         answer = act(argument) if act is not None else None
+        if answer is _NOT_UNDERSTOOD:
+            return "could not understand: '%s'" % command
         return self.dashboard_commands.reply(key) if answer is None else answer
+
+    def _named(self, argument, names):
+        """`argument` as one of `names` (in any case), or _NOT_UNDERSTOOD."""
+        return argument.upper() if argument.upper() in names else _NOT_UNDERSTOOD
 
     def _dashboard_power_on(self, argument):
         if self.robot_mode == POWER_OFF:
@@ -372,18 +381,20 @@ class RobotState(object):
         self.popup = argument
 
     def _dashboard_setuserrole(self, argument):
-        if argument.upper() not in self.dashboard_commands.user_roles:
-            return "could not understand: 'setUserRole %s'" % argument
-        self.user_role = argument.upper()
+        role = self._named(argument, self.dashboard_commands.user_roles)
+        if role is _NOT_UNDERSTOOD:
+            return role
+        self.user_role = role
         return 'Setting user role: %s' % argument
 
     def _dashboard_getuserrole(self, argument):
         return self.user_role
 
     def _dashboard_set_operational_mode(self, argument):
-        if argument.upper() not in self.dashboard_commands.operational_modes:
-            return "could not understand: 'set operational mode %s'" % argument
-        self.operational_mode = argument.upper()
+        mode = self._named(argument, self.dashboard_commands.operational_modes)
+        if mode is _NOT_UNDERSTOOD:
+            return mode
+        self.operational_mode = mode
         return "Operational mode '%s' is set" % argument
 
     def _dashboard_clear_operational_mode(self, argument):
