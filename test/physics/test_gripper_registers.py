@@ -152,8 +152,11 @@ def test_a_node_running_late_publishes_each_status_with_the_fingers_of_its_own_t
     end = time.monotonic() + 60.0
     while client.finger()[1]['motion'] == 'moving' and time.monotonic() < end:
         time.sleep(0.05)  # the node starved meanwhile
-    now = client.finger()[0]
-    ticks = [n * PERIOD for n in range(int(commanded / PERIOD) + 1, int(now / PERIOD) + 1)]
+    # The fingers stopped between two ticks, or at the last: the ticks run on to the first after it.
+    last = int(client.finger()[0] / PERIOD) + 1
+    while client.finger()[0] < last * PERIOD and time.monotonic() < end:
+        time.sleep(0.005)
+    ticks = [n * PERIOD for n in range(int(commanded / PERIOD) + 1, last + 1)]
     statuses = []
     for at in ticks:
         gripper.advance(PERIOD, at)

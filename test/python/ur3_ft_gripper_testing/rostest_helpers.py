@@ -203,3 +203,12 @@ class Recorder(object):
 
     def next_after(self, t, timeout=TIMEOUT):
         return wait_for(lambda: self.since(t), 'a message on %s' % self.topic, timeout, step=0.01)[0]
+
+    def stamped_after(self, stamp, timeout=TIMEOUT):
+        """The first message whose header stamp is at or after `stamp` (rospy.Time): a node on a busy machine
+        may publish what it measured earlier after messages received later."""
+        def found():
+            with self.lock:
+                return next((m for (_, m) in self.items if m.header.stamp >= stamp), None)
+        return wait_for(found, 'a message on %s stamped at or after %.3f s' % (self.topic, stamp.to_sec()),
+                        timeout, step=0.01)
