@@ -10,7 +10,8 @@ model, the robot mode the dashboard asked for, the speed slider the IO client se
 given and the least time its profile allows, a straight line for movel, the speeds speedj and speedl asked
 for, the last target of a servoj stream, a watchdog's period, and on physics the force a forceMode press
 applies as the robot's own wrench and the FT 300 (rq_sensor's topic on the cell's master) read it, and the
-block ur_rtde's moves and the gripper URCap's socket pick up, held at its width. Times
+block ur_rtde's moves and the gripper URCap's socket pick up, held at its width; and pymodbus (PyPI) on the
+2F-140's serial line and gateway, as Robotiq's Modbus nodes drive it, closing on that block. Times
 are the controller's own (RTDE's timestamp), not the wall clock's, except to wait for the node to come up.
 """
 import math
@@ -28,6 +29,7 @@ import rtde_control
 import rtde_io
 import rtde_receive
 from dashboard_client import DashboardClient
+from pymodbus.client import ModbusSerialClient, ModbusTcpClient
 
 from conftest import exported_urdf
 
@@ -72,10 +74,13 @@ def cell_log(address, lines=30):
         return 'the cell printed, last:\n' + ''.join(log.readlines()[-lines:])
 
 
-def bring_up(ur_type, log_dir, *arguments):
+def bring_up(ur_type, log_dir, *arguments, sim_gateway=False):
     """The address of a simulated cell of `ur_type` started for these tests (a loopback address of its own, a
-    master of its own), with the bring-up's `arguments`; the bring-up ends with the generator."""
+    master of its own), with the bring-up's `arguments` (and sim_gateway: the 2F-140's Modbus TCP gateway on
+    that address); the bring-up ends with the generator."""
     address = '127.0.%d.%d' % (random.randint(1, 254), random.randint(2, 254))
+    if sim_gateway:
+        arguments += ('sim_gripper_gateway_ip:=' + address,)
     master = free_port()
     env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % master)
     CELL_LOGS[address] = str(log_dir / ('cell-%s.log' % address))
@@ -295,10 +300,22 @@ SETTLE, MEASURE = 2.5, 1.0  # s of the controller's time: pressing before the fo
 FT300_RATE = 100.0  # Hz: rq_sensor's stream
 
 
+# The 2F-140's serial port and its gateway's port, of each physics cell by address (the gateway on the cell's
+# address, on a port a user may take).
+GRIPPER_LINES = {}
+GATEWAY_PORT = 5020
+
+
 @pytest.fixture(scope='module')
 def physics_ip(ur_type, tmp_path_factory):
-    """A physics cell, on its simulated clock at real time (ur_rtde keeps the wall clock's time)."""
-    yield from bring_up(ur_type, tmp_path_factory.mktemp('physics'), 'physics:=true')
+    """A physics cell, on its simulated clock at real time (ur_rtde keeps the wall clock's time), its 2F-140 also
+    on Modbus RTU (a serial port path) and Modbus TCP (a gateway on the cell's address)."""
+    log_dir = tmp_path_factory.mktemp('physics')
+    line = str(log_dir / 'ttyRobotiq2F')
+    for address in bring_up(ur_type, log_dir, 'physics:=true', 'sim_gripper_serial_port:=' + line,
+                            'sim_gripper_gateway_port:=%d' % GATEWAY_PORT, sim_gateway=True):
+        GRIPPER_LINES[address] = line
+        yield address
 
 
 def gripper_tcp(ur_type):
@@ -434,6 +451,80 @@ def register_position(opening):
         unit = yaml.safe_load(stream)['gripper']
     counts_per_metre = (unit['gpo_closed'] - unit['gpo_open']) / unit['stroke']
     return unit['gpo_closed'] - opening * counts_per_metre, counts_per_metre
+
+
+def gripper_request(rACT=0, rGTO=0, rATR=0, rPR=0, rSP=0, rFR=0):
+    """The three request registers, as Robotiq's manual lays them out (action request, two reserved bytes,
+    position, speed, force; high byte first)."""
+    return [(rACT | rGTO << 3 | rATR << 4) << 8, rPR, rSP << 8 | rFR]
+
+
+def gripper_status(registers):
+    """gSTA, gOBJ, gFLT, gPR, gPO of the status registers, as the manual lays them out."""
+    status, fault, echo, position = registers[0] >> 8, registers[1] >> 8, registers[1] & 0xFF, registers[2] >> 8
+    return dict(gSTA=(status >> 4) & 3, gOBJ=(status >> 6) & 3, gFLT=fault & 0x0F, gPR=echo, gPO=position)
+
+
+class ModbusGripper(object):
+    """The 2F-140 through pymodbus (PyPI), as Robotiq's ROS nodes talk to it: on its serial line (slave 9,
+    115200 8N1, requests at 0x03E8 with function 16, status at 0x07D0 with function 3) or through the gateway
+    (registers from 0, status with function 4)."""
+
+    def __init__(self, client, request, status, read, device_id):
+        self.client, self.request_at, self.status_at, self.device_id = client, request, status, device_id
+        self.read_status = getattr(client, read)
+        assert client.connect(), 'pymodbus could not open %s' % client
+
+    def command(self, **registers):
+        reply = self.client.write_registers(self.request_at, gripper_request(**registers), device_id=self.device_id)
+        assert not reply.isError(), reply
+
+    def status(self):
+        reply = self.read_status(self.status_at, count=3, device_id=self.device_id)
+        assert not reply.isError(), reply
+        return gripper_status(reply.registers)
+
+    def close(self):
+        self.client.close()
+
+
+def test_pymodbus_on_the_gripper_line_and_gateway_closes_on_the_block_opens_and_reads_a_fault(ur_type, physics_ip):
+    receive = rtde_receive.RTDEReceiveInterface(physics_ip)
+    control = rtde_control.RTDEControlInterface(physics_ip)
+    line = ModbusGripper(ModbusSerialClient(GRIPPER_LINES[physics_ip], baudrate=115200, bytesize=8, parity='N',
+                                            stopbits=1, timeout=5.0), 0x03E8, 0x07D0, 'read_holding_registers', 9)
+    gateway = ModbusGripper(ModbusTcpClient(physics_ip, port=GATEWAY_PORT, timeout=5.0), 0, 0,
+                            'read_input_registers', 0)
+    try:
+        # A move before activation is a fault (manual: gFLT 0x07, the activation bit must be set first).
+        line.command(rACT=0)
+        line.command(rACT=0, rGTO=1, rPR=255, rSP=255, rFR=100)
+        controller_wait(receive, lambda: line.status()['gFLT'] == 0x07, 2.0)
+        assert gateway.status()['gFLT'] == 0x07  # one gripper behind both
+        line.command(rACT=1, rGTO=1, rPR=0, rSP=255, rFR=100)
+        controller_wait(receive, lambda: line.status()['gSTA'] == 3 and line.status()['gOBJ'] == 3, 5.0)
+        assert control.setTcp(gripper_tcp(ur_type)), cell_log(physics_ip)
+        x, y = -BLOCK_XY[0], -BLOCK_XY[1]  # the controller's base is base_link turned half a turn about z
+        above = [x, y, BLOCK_TOP + 0.08, 0.0, math.pi, 0.0]
+        around = [x, y, BLOCK_TOP - GRASP_DEPTH, 0.0, math.pi, 0.0]
+        assert control.moveJ_IK(above, 1.0, 1.0)
+        assert control.moveL(around, 0.1, 0.5)
+        gateway.command(rACT=1, rGTO=1, rPR=255, rSP=255, rFR=100)  # close, through the gateway
+        controller_wait(receive, lambda: gateway.status()['gOBJ'] != 0, 5.0)
+        held_at, counts_per_metre = register_position(BLOCK_WIDTH)
+        held = line.status()
+        assert held['gOBJ'] == 2, 'the close did not stop on the block: %s' % held
+        assert abs(held['gPO'] - held_at) <= GAP_TOLERANCE * counts_per_metre + 0.5, held
+        line.command(rACT=1, rGTO=1, rPR=0, rSP=255, rFR=100)  # open, on the line: the block stays standing
+        controller_wait(receive, lambda: line.status()['gOBJ'] == 3, 5.0)
+        assert gateway.status()['gPR'] == 0
+        assert control.moveL(above, 0.1, 0.5)
+    finally:
+        line.close()
+        gateway.close()
+        control.stopScript()
+        control.disconnect()
+        receive.disconnect()
 
 
 def test_ur_rtde_and_the_gripper_urcap_socket_pick_up_the_block(ur_type, physics_ip):

@@ -2,8 +2,11 @@
 """rostest node: the controller's network faces and ur_robot_driver's ROS interface drive one robot
 (network_faces.test): the Dashboard Server on 29999, with a client written from UR's Dashboard Server
 document, and RTDE on 30004, with the client written from UR's RTDE guide (ur3_ft_gripper_testing); and the
-2F-140 on the gripper URCap's socket (63352) beside its Robotiq topics."""
+2F-140 on the gripper URCap's socket (63352) beside its Robotiq topics, and on Modbus RTU (minimalmodbus on its
+serial port) and Modbus TCP (a client written from Robotiq's manual, as its gateway is read)."""
+import os
 import socket
+import struct
 import time
 import unittest
 
@@ -190,6 +193,41 @@ class NetworkFacesTest(unittest.TestCase):
         wait_for(lambda: get('PRE') == 40 and get('OBJ') == 3, "GET PRE 40 and OBJ 3 after the topic's command")
         self.assertEqual((get('SPE'), get('FOR')), (200, 50))
         urcap.close()
+
+    def test_9_the_gripper_on_modbus_rtu_and_tcp_and_its_topics_are_one_gripper(self):
+        import minimalmodbus
+        status = Recorder('Robotiq2FGripperRobotInput', Robotiq2FGripper_robot_input)
+        command = rospy.Publisher('Robotiq2FGripperRobotOutput', Robotiq2FGripper_robot_output, queue_size=1)
+        path = rospy.get_param('~gripper_serial_port')
+        wait_for(lambda: os.path.exists(path), 'the 2F-140 serial port at %s' % path)
+        # As Robotiq's Modbus RTU node opens its USB adapter: slave 9, 115200 8N1.
+        rtu = minimalmodbus.Instrument(path, 9, mode=minimalmodbus.MODE_RTU)
+        rtu.serial.baudrate, rtu.serial.timeout = 115200, TIMEOUT
+        # Reset, then activate and close, written at 0x03E8 (rACT bit 0, rGTO bit 3; rPR, rSP, rFR).
+        rtu.write_registers(0x03E8, [0x0000, 0x0000, 0x0000])
+        wait_for(lambda: status.latest() and status.latest().gSTA == 0, 'gSTA 0 on the topic after the reset')
+        rtu.write_registers(0x03E8, [0x0900, 0x00FF, 0xFF64])
+        wait_for(lambda: status.latest().gSTA == 3 and status.latest().gOBJ == 3 and status.latest().gPR == 255,
+                 'the topic to show the activation and close Modbus asked for, ended')
+        registers = rtu.read_registers(0x07D0, 3, functioncode=3)  # as robotiq_modbus_rtu reads them
+        data = struct.pack('>3H', *registers)
+        self.assertEqual((data[0] & 1, (data[0] >> 4) & 3, data[3]), (1, 3, 255))
+        wait_for(lambda: status.latest().gPO == struct.pack('>3H', *rtu.read_registers(0x07D0, 3))[4],
+                 'the same gPO on the topic and on Modbus RTU')
+        # What the topic commands, the gateway reads (function 4 from register 0, as robotiq_modbus_tcp does).
+        wait_for(lambda: command.get_num_connections() > 0, 'the gripper node to subscribe')
+        command.publish(Robotiq2FGripper_robot_output(rACT=1, rGTO=1, rPR=40, rSP=200, rFR=50))
+        gateway = socket.create_connection((self.address, rospy.get_param('~gripper_gateway_port')), timeout=TIMEOUT)
+
+        def gateway_status():
+            gateway.sendall(struct.pack('>HHHBBHH', 7, 0, 6, 0, 4, 0, 3))
+            header = gateway.recv(7)
+            self.assertEqual(struct.unpack('>HHHB', header), (7, 0, 9, 0))
+            return gateway.recv(8)[2:]
+
+        wait_for(lambda: gateway_status()[3] == 40, 'gPR 40 on the gateway after the topic\'s command')
+        gateway.close()
+        rtu.serial.close()
 
     def connect_to(self, port):
         try:

@@ -55,6 +55,11 @@ above is the same for both:
 With ``~urcap_address`` (the simulated robot's address), the registers are also
 served as Robotiq's gripper URCap serves them on the robot: SET and GET on a TCP
 socket (network/robotiq_urcap.py, port 63352), one register machine behind both.
+With ``~modbus_rtu_port`` (a path) they are served on Modbus RTU as the gripper
+serves them on its RS-485 line, on a pseudo-terminal linked at that path, and
+with ``~modbus_tcp_address`` on Modbus TCP as Robotiq's gateway serves them
+(network/robotiq_modbus.py): Robotiq's own Modbus nodes and any Modbus client
+drive the same register machine.
 
 Its private parameters are declared in PARAMETERS below (their reference:
 doc/node_parameters.md).
@@ -67,7 +72,7 @@ import time
 
 from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 from ur3_ft_gripper_description.devices.physics import link
-from ur3_ft_gripper_description.devices.network import listen, robotiq_urcap
+from ur3_ft_gripper_description.devices.network import listen, robotiq_modbus, robotiq_urcap
 
 # A kind of nonsense register value is warned about at most once per this many seconds.
 RATE_LIMIT = 10.0
@@ -394,6 +399,13 @@ PARAMETERS = (
     sim_params.Param('~urcap_address', '', 'IPv4 address of the simulated robot, where the gripper URCap\'s socket '
                      'listens (config/robotiq_2f_urcap.yaml\'s port, 63352): SET and GET on the same registers as '
                      'this node\'s topics; empty: none'),
+    sim_params.Param('~modbus_rtu_port', '', 'Path of a serial port where the gripper answers Modbus RTU as on its '
+                     'RS-485 line (slave 9, config/robotiq_2f_modbus.yaml): a symbolic link made there to a '
+                     'pseudo-terminal, for Robotiq\'s Modbus RTU node or any client; empty: none'),
+    sim_params.Param('~modbus_tcp_address', '', 'IPv4 address where the gripper answers Modbus TCP as Robotiq\'s '
+                     'gateway serves it (registers from 0); empty: none'),
+    sim_params.Param('~modbus_tcp_port', 502, 'TCP port of ~modbus_tcp_address: the gateway\'s 502, which needs '
+                     'privileges; e.g. 5020 for a client that takes a port', sim_params.number(minimum=0)),
     sim_params.PHYSICS,
     sim_params.DEVICES_FILE,
 )
@@ -427,6 +439,32 @@ def start_urcap_socket(address, gripper, lock, log, port=None):
                                  log, table['port'] if port is None else port)
     threading.Thread(target=server.serve_forever, name='urcap socket', daemon=True).start()
     return server
+
+
+def start_modbus_faces(get_param, gripper, lock, log):
+    """The Modbus faces the parameters ask for, serving in threads of their own: [(what, where, server)];
+    listen.ListenError or robotiq_modbus.ModbusUnavailable (one line) when one cannot start."""
+    port = sim_params.read(get_param, PARAMETERS, '~modbus_rtu_port')
+    address = sim_params.read(get_param, PARAMETERS, '~modbus_tcp_address')
+    if not (port or address):
+        return []
+    table = robotiq_modbus.read_table()
+    faces = []
+    try:
+        if port:
+            line = robotiq_modbus.serve_rtu(table, gripper, lock, log, link=port)
+            faces.append(('Modbus RTU (slave %d, %d 8N1)' % (table['rtu']['slave_id'],
+                                                            table['rtu']['serial']['baudrate']),
+                          '%s (%s)' % (port, line.path), line))
+        if address:
+            server = robotiq_modbus.serve_tcp(table, gripper, lock, log, listen.checked_address(address),
+                                              int(sim_params.read(get_param, PARAMETERS, '~modbus_tcp_port')))
+            faces.append(('Modbus TCP', '%s:%d' % server.server_address[:2], server))
+    except Exception:
+        for _, _, face in faces:
+            face.shutdown()
+        raise
+    return faces
 
 
 def run(rospy):
@@ -471,6 +509,14 @@ def run(rospy):
             return 1
         rospy.on_shutdown(server.shutdown)
         rospy.loginfo("gripper_sim: the gripper URCap's socket listens on %s:%d", *server.server_address[:2])
+    try:
+        faces = start_modbus_faces(rospy.get_param, gripper, lock, rospy.logwarn)
+    except (listen.ListenError, robotiq_modbus.ModbusUnavailable, sim_params.ParamError) as exc:
+        rospy.logfatal('gripper_sim: %s', exc)
+        return 1
+    for what, where, face in faces:
+        rospy.on_shutdown(face.shutdown)
+        rospy.loginfo('gripper_sim: the 2F-140 answers %s on %s', what, where)
 
     def on_command(msg):
         with lock:
