@@ -3,7 +3,8 @@
 (network_faces.test): the Dashboard Server on 29999, with a client written from UR's Dashboard Server
 document, and RTDE on 30004, with the client written from UR's RTDE guide (ur3_ft_gripper_testing); and the
 2F-140 on the gripper URCap's socket (63352) beside its Robotiq topics, and on Modbus RTU (minimalmodbus on its
-serial port) and Modbus TCP (a client written from Robotiq's manual, as its gateway is read)."""
+serial port) and Modbus TCP (a client written from Robotiq's manual, as its gateway is read); and the FT 300's
+data stream on its serial line beside its topic."""
 import os
 import socket
 import struct
@@ -228,6 +229,35 @@ class NetworkFacesTest(unittest.TestCase):
         wait_for(lambda: gateway_status()[3] == 40, 'gPR 40 on the gateway after the topic\'s command')
         gateway.close()
         rtu.serial.close()
+
+    def test_10_the_ft300_stream_carries_the_readings_its_topic_publishes(self):
+        import minimalmodbus
+        from robotiq_ft_sensor.msg import ft_sensor
+        path = rospy.get_param('~ft_serial_port')
+        wait_for(lambda: os.path.exists(path), 'the FT 300 serial port at %s' % path)
+        line = minimalmodbus.Instrument(path, 9, mode=minimalmodbus.MODE_RTU)
+        line.serial.baudrate, line.serial.timeout = 19200, TIMEOUT
+        firmware = struct.pack('>3H', *line.read_registers(500, 3))  # as rq_sensor probes it: 'F' first
+        self.assertEqual(chr(firmware[0]), 'F')
+        readings = Recorder('robotiq_ft_sensor', ft_sensor)
+        wait_for(lambda: readings.latest() is not None, 'a reading on robotiq_ft_sensor')
+        # rq_sensor's start of the stream, byte for byte, and the sensor's echo before the frames.
+        line.serial.write(bytes.fromhex('09 10 01 9A 00 01 02 02 00 CD CA'))
+        self.assertEqual(line.serial.read(8), bytes.fromhex('09 10 01 9A 00 01 21 52'))
+        data = line.serial.read(16 * 100)  # a second of the stream
+        line.serial.write(b'\xff' * 50)  # the stop
+        frames = [struct.unpack('<6h', data[i + 2:i + 14]) for i in range(0, len(data), 16)]
+        self.assertTrue(all(data[i:i + 2] == b'\x20\x4e' for i in range(0, len(data), 16)))
+        # Frame for message, in order: the stream's counts are the topic's values (0.01 N, 0.001 N m).
+        def published():
+            return [(round(m.Fx * 100), round(m.Fy * 100), round(m.Fz * 100), round(m.Mx * 1000),
+                     round(m.My * 1000), round(m.Mz * 1000)) for m in readings.since(0.0)]
+
+        first = wait_for(lambda: frames[0] in published() and published().index(frames[0]) + 1,
+                         "the stream's first frame on the topic") - 1
+        wait_for(lambda: len(published()) >= first + len(frames), 'the topic to publish the streamed readings')
+        self.assertEqual(published()[first:first + len(frames)], frames)
+        line.serial.close()
 
     def connect_to(self, port):
         try:

@@ -265,13 +265,13 @@ class SimDevicesTest(unittest.TestCase):
     def test_accessor_answers_as_rq_sensor(self):
         acc = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
         acc.wait_for_service(TIMEOUT)
-        answers = {1: (True, 'SIM-0000'), 2: (True, 'SIM-0.0.0'), 4: (True, '2026'),
+        answers = {1: (True, 'SIM-0001'), 2: (True, 'FTS-0.0.0'), 4: (True, '2026'),
                    3: (False, 'Unsupported command_id'), 0: (False, 'Unsupported command_id'),
                    255: (False, 'Unsupported command_id')}
         for command_id, expected in answers.items():
             reply = acc(command_id=command_id, command='')
             self.assertEqual((reply.success, reply.res), expected, command_id)
-        legacy = {'GET SNU': 'SIM-0000', 'GET FWV': 'SIM-0.0.0', 'GET PYE': '2026', 'GET XYZ': ''}
+        legacy = {'GET SNU': 'SIM-0001', 'GET FWV': 'FTS-0.0.0', 'GET PYE': '2026', 'GET XYZ': ''}
         for command, res in legacy.items():
             reply = acc(command_id=1, command=command)  # the string wins
             self.assertEqual((reply.success, reply.res), (False, res), command)
@@ -297,7 +297,7 @@ class SimDevicesTest(unittest.TestCase):
             acc.wait_for_service(TIMEOUT)
             time.sleep(4.0)  # a window to observe: no wrench, and no second warning
             self.assertTrue(process.is_alive())
-            self.assertEqual(acc(command_id=1, command='').res, 'SIM-0000')  # serving meanwhile
+            self.assertEqual(acc(command_id=1, command='').res, 'SIM-0001')  # serving meanwhile
             self.assertEqual(self.no_tf.since(0), [])
             self.assertEqual(self.no_tf_stream.since(0), [])
             # An unsupported id as a fence: the node's earlier warnings arrive before its warning.

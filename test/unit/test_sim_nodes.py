@@ -187,7 +187,7 @@ def test_a_zero_requested_ahead_of_the_readings_sent_takes_the_one_at_the_reques
 
 # -- robotiq_ft_sensor_acc, as rq_sensor answers -------------------------------------
 
-IDENTITY = dict(serial_number='SIM-0000', firmware_version='SIM-0.0.0', production_year='2026')
+IDENTITY = dict(serial_number='SIM-0001', firmware_version='FTS-0.0.0', production_year='2026')
 
 
 class AccLog(object):
@@ -222,7 +222,7 @@ def acc(command_id=0, command=''):
     return reply, sensor.zeroes, log.infos, log.warnings
 
 
-@pytest.mark.parametrize('command_id, res', [(1, 'SIM-0000'), (2, 'SIM-0.0.0'), (4, '2026')])
+@pytest.mark.parametrize('command_id, res', [(1, 'SIM-0001'), (2, 'FTS-0.0.0'), (4, '2026')])
 def test_acc_ids_answer_the_identity(command_id, res):
     assert acc(command_id)[:2] == ((True, res), 0)
 
@@ -240,7 +240,7 @@ def test_acc_unknown_id_fails_with_the_drivers_answer_and_warning(command_id):
 
 
 @pytest.mark.parametrize('command, res, zeroes', [
-    ('GET SNU', 'SIM-0000', 0), ('GET FWV', 'SIM-0.0.0', 0), ('GET PYE', '2026', 0),
+    ('GET SNU', 'SIM-0001', 0), ('GET FWV', 'FTS-0.0.0', 0), ('GET PYE', '2026', 0),
     ('SET ZRO', 'Done', 1),
     ('GET XYZ', '', 0), ('SET SNU', '', 0), ('PUT ZRO', '', 0), ('SET ZERO', '', 0), ('ZRO', '', 0)])
 def test_acc_legacy_strings_answer_as_rq_sensor_and_never_report_success(command, res, zeroes):

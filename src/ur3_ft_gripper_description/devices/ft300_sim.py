@@ -33,6 +33,11 @@ simulated time (use_sim_time) the cell keeps one sample per period of its
 time for this node, so the stream carries exactly ~rate readings per
 simulated second, each stamped with its time, however late the node runs.
 
+With ``~modbus_rtu_port`` (a path) the sensor is also on its serial line, as
+behind its USB adapter, on a pseudo-terminal linked at that path
+(network/ft300_wire.py): Modbus RTU and the data stream, which rq_sensor and
+Modbus clients read; the stream carries each reading this node publishes.
+
 Both sources, the gravity model and the cell, sit behind one seam
 (GravitySource, CellSource: ``readings(now)``) and one publishing loop.
 """
@@ -43,6 +48,7 @@ import numpy as np
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.devices import node_loop, sim_params, wrench_model
 from ur3_ft_gripper_description.devices.physics import link
+from ur3_ft_gripper_description.devices.network import listen, modbus_line
 from ur3_ft_gripper_description.model import inertials
 
 
@@ -66,6 +72,10 @@ PARAMETERS = (
     sim_params.Param('~max_pose_age', 0.5, 'A sensor pose older than this (s) is stale (robot_state_publisher '
                      'stopped?): nothing is published until it is fresh again', sim_params.number(strictly_above=0.0)),
     sim_params.PHYSICS,
+    sim_params.Param('~modbus_rtu_port', '', 'Path of a serial port where the sensor also answers as on its USB '
+                     'adapter (Modbus RTU, slave 9, 19200 8N1, then its data stream; '
+                     'config/robotiq_ft300_modbus.yaml): a symbolic link made there to a pseudo-terminal, for '
+                     'rq_sensor (its ~serial_id: the pts/N the node logs) or any client; empty: none'),
     sim_params.Param('~serial_id', '', "rq_sensor's serial device: accepted, unused (said once if set)"),
     sim_params.Param('~max_retries', 100, "rq_sensor's reconnection tries: accepted, unused"),
 )
@@ -428,6 +438,15 @@ def run(rospy):
             return source
     else:
         source = GravitySource(rospy, settings, sensor)
+    try:
+        wire = start_serial_line(rospy.get_param, settings.identity, rospy.logwarn)
+    except (listen.ListenError, ValueError, modbus_line.ModbusUnavailable) as exc:
+        rospy.logfatal('ft300_sim: %s', exc)
+        return 1
+    if wire is not None:
+        rospy.on_shutdown(wire[1].shutdown)
+        rospy.loginfo("ft300_sim: the FT 300 answers on its serial line at %s (%s; rq_sensor's serial_id: %s)",
+                      wire[1].link, wire[1].path, wire[1].path[len('/dev/'):])
     sensor_publisher = rospy.Publisher('robotiq_ft_sensor', ft_sensor, queue_size=512)
     wrench_publisher = rospy.Publisher('robotiq_ft_wrench', WrenchStamped, queue_size=512)
     log = _Log(rospy)
@@ -462,6 +481,8 @@ def run(rospy):
             force_msg.x, force_msg.y, force_msg.z = fx, fy, fz
             torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
             wrench_publisher.publish(message)
+            if wire is not None:
+                wire[0].reading((fx, fy, fz, tx, ty, tz))
 
     if sim_time:
         # One reading per period of simulated time, stamped with it, however late this node runs.
@@ -469,6 +490,16 @@ def run(rospy):
     else:
         status = node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=source.restart)
     return 1 if lost else status
+
+
+def start_serial_line(get_param, identity, log):
+    """(ft300_wire.Ft300Line, its PseudoTerminal) when ~modbus_rtu_port names a path, else None; listen.ListenError,
+    ValueError or modbus_line.ModbusUnavailable (one line each) when it cannot start."""
+    path = sim_params.read(get_param, PARAMETERS, '~modbus_rtu_port')
+    if not path:
+        return None
+    from ur3_ft_gripper_description.devices.network import ft300_wire
+    return ft300_wire.serve(ft300_wire.read_table(), identity, log, link=path)
 
 
 def _cell_source(rospy, settings, sim_time):

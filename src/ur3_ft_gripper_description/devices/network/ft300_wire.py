@@ -1,0 +1,224 @@
+"""The FT 300 on its serial line: Modbus RTU on a pseudo-terminal, then the data stream; no ROS.
+
+As the sensor behind its USB adapter: at 19200 8N1 it answers Modbus RTU as slave 9, its registers holding
+the force and moment, its identity and the stream's start (config/robotiq_ft300_modbus.yaml). Writing
+the start value to the stream register switches it to the data stream: a 16-byte frame per reading, at
+the sensor's 100 Hz, until the client sends a run of 0xFF bytes; then it answers Modbus again. This is
+how rq_sensor, Robotiq's ROS driver, talks to it. The framing (CRC, slave id) is modbus_tk's.
+
+The readings are the node's own (ft300_sim), handed over one by one as it publishes them (`reading`):
+the stream carries what the ROS face publishes, frame for message, in the same order, and the force
+registers read the last of them.
+
+Bad input, as the sensor meets it: a frame with a wrong CRC or for another slave gets no reply; a
+request it cannot serve gets the protocol's exception reply; each costs one log line, and the line goes
+on. While it streams, it reads nothing but the 0xFF that stop it.
+"""
+
+import struct
+import threading
+
+import yaml
+
+from ..sim_params import PackageFile
+from .modbus_line import MAX_ADU, PseudoTerminal, framings
+
+TABLE_FILE = PackageFile('config/robotiq_ft300_modbus.yaml')
+COUNT_MIN, COUNT_MAX = -32768, 32767
+
+
+def read_table(path=None):
+    with open(path or TABLE_FILE.path()) as stream:
+        return yaml.safe_load(stream)
+
+
+def identity_registers(table, identity):
+    """{register: value} of the identity blocks for `identity` (serial_number 'ABC-1234', firmware_version
+    'FTS-1.2.3', production_year '2026': rq_sensor's own formats); ValueError (one line) for another form."""
+    def letters(text, name, form):
+        if len(text) < 4 or text[3] != '-' or not all(32 < ord(c) < 127 for c in text[:3]):
+            raise ValueError('the FT 300\'s %s %r is not of the form %s, as rq_sensor reads it from the sensor'
+                             % (name, text, form))
+        return [ord(c) for c in text[:3]]
+
+    firmware, serial_number = identity['firmware_version'], identity['serial_number']
+    chars = letters(firmware, 'firmware_version', 'FTS-1.2.3')
+    try:
+        numbers = [int(n) for n in firmware[4:].split('.')]
+        if len(numbers) != 3 or not all(0 <= n <= 255 for n in numbers) or chars[0] != ord('F'):
+            raise ValueError
+    except ValueError:
+        raise ValueError('the FT 300\'s firmware_version %r is not of the form F..-1.2.3 (numbers 0..255; rq_sensor '
+                         'takes a sensor whose firmware does not start with F for none)' % firmware) from None
+    letters_sn = letters(serial_number, 'serial_number', 'ABC-1234')
+    if not serial_number[4:].isdigit() or int(serial_number[4:]) > 0xFFFFFFFF:
+        raise ValueError('the FT 300\'s serial_number %r is not of the form ABC-1234' % serial_number)
+    number = int(serial_number[4:])
+    year = str(identity['production_year'])
+    if not year.isdigit() or int(year) > 0xFFFF:
+        raise ValueError('the FT 300\'s production_year %r is not a year' % year)
+    blocks = table['blocks']
+    values = {
+        'firmware': [chars[0] << 8 | chars[1], chars[2] << 8 | numbers[0], numbers[1] << 8 | numbers[2]],
+        'serial_number': [letters_sn[0] << 8 | letters_sn[1], letters_sn[2] << 8, number & 0xFFFF, number >> 16],
+        'production_year': [int(year)],
+    }
+    return {blocks[name]['first'] + i: value for name, registers in values.items()
+            for i, value in enumerate(registers)}
+
+
+class Ft300Line(object):
+    """The sensor's side of the line: answer(bytes) -> reply bytes for what the client sent, reading(values)
+    for each reading the node publishes. `send(bytes)` writes to the client (the line's)."""
+
+    def __init__(self, table, identity, log):
+        self.query_class = framings()[0]
+        self.crc = _crc_function()
+        self.table, self.log = table, log
+        self.slave_id = table['slave_id']
+        self.codes = {int(code): name for code, name in table['function_codes'].items()}
+        self.exceptions = table['exceptions']
+        self.fixed = identity_registers(table, identity)
+        stream = table['stream']
+        self.header = bytes(stream['header'])
+        self.resolution = [stream['force_resolution']] * 3 + [stream['torque_resolution']] * 3
+        self.stop_byte, self.stop_count = stream['stop_byte'], stream['stop_count']
+        self.lock = threading.Lock()
+        self.counts = [0] * 6
+        self.streaming = False
+        self._stop_run = 0
+        self._start_pending = False
+        self.send = None
+        self.frames_sent = 0
+
+    # -- the readings -------------------------------------------------------------------
+
+    def reading(self, values):
+        """One reading (fx, fy, fz in N, mx, my, mz in N m, in the stream's resolution), as the node publishes
+        it: the force registers hold it, and a streaming sensor sends its frame."""
+        counts = [min(max(int(round(v / r)), COUNT_MIN), COUNT_MAX) for v, r in zip(values, self.resolution)]
+        with self.lock:
+            self.counts = counts
+            if not self.streaming or self.send is None:
+                return
+            self.frames_sent += 1
+        self.send(self.frame(counts))
+
+    def frame(self, counts):
+        data = self.header + struct.pack('<6h', *counts)
+        return data + self.crc(data)
+
+    # -- what the client sends ----------------------------------------------------------
+
+    def answer(self, data):
+        with self.lock:
+            if self.streaming:
+                self._read_while_streaming(data)
+                return b''
+        if data.count(self.stop_byte) == len(data):
+            return b''  # a stop sent to a sensor that is not streaming: nothing to stop
+        if len(data) > MAX_ADU:
+            self.log('FT 300 Modbus RTU: %d bytes without a pause, longer than any frame; dropped' % len(data))
+            return b''
+        query = self.query_class()
+        try:
+            slave, pdu = query.parse_request(data)
+        except Exception as exc:  # modbus_tk's invalid-request error: the frame is not a Modbus RTU frame
+            self.log('FT 300 Modbus RTU: a frame the sensor cannot read (%s): %s; no reply, as the sensor gives none'
+                     % (exc, data[:16].hex(' ')))
+            return b''
+        if slave != self.slave_id:
+            self.log('FT 300 Modbus RTU: a frame for slave %d, not the sensor\'s %d; no reply' % (slave, self.slave_id))
+            return b''
+        if not pdu:
+            self.log('FT 300 Modbus RTU: a frame with no function code; no reply')
+            return b''
+        response, problem = self.reply(pdu)
+        if problem is not None:
+            self.log('FT 300 Modbus RTU: %s; exception %d replied' % (problem, response[1]))
+        if not self._start_pending:
+            return query.build_response(response)
+        with self.lock:  # the reply first, then the stream's frames (rq_sensor reads the reply, then frames)
+            self.send(query.build_response(response))
+            self.streaming, self._stop_run, self._start_pending = True, 0, False
+        return b''
+
+    def _read_while_streaming(self, data):
+        for byte in data:
+            self._stop_run = self._stop_run + 1 if byte == self.stop_byte else 0
+            if self._stop_run >= self.stop_count:
+                self.streaming, self._stop_run = False, 0
+                return  # what follows the stop in this burst is more of it
+
+    # -- Modbus requests ----------------------------------------------------------------
+
+    def _exception(self, code, name, problem):
+        return struct.pack('>BB', code | 0x80, self.exceptions[name]), problem
+
+    def reply(self, pdu):
+        """(response PDU, the problem in words or None) for one request PDU."""
+        code = pdu[0]
+        kind = self.codes.get(code)
+        if kind is None:
+            return self._exception(code, 'illegal_function', 'function code %d is not one the sensor answers (%s)'
+                                   % (code, ', '.join(str(c) for c in sorted(self.codes))))
+        return getattr(self, '_' + kind)(code, pdu[1:])
+
+    def _registers(self, address, count):
+        """The values of registers address .. address + count - 1, all in one block, or None."""
+        wrench = self.table['blocks']['wrench']
+        if wrench['first'] <= address and address + count <= wrench['first'] + wrench['count']:
+            with self.lock:
+                counts = list(self.counts)
+            return [c & 0xFFFF for c in counts[address - wrench['first']:address - wrench['first'] + count]]
+        for block in self.table['blocks'].values():
+            if block['first'] <= address and address + count <= block['first'] + block['count']:
+                return [self.fixed[address + i] for i in range(count)]
+        return None
+
+    def _read_registers(self, code, body):
+        if len(body) != 4:
+            return self._exception(code, 'illegal_data_value', 'a read of %d bytes, not 4' % len(body))
+        address, count = struct.unpack('>HH', body)
+        if not 1 <= count <= 125:
+            return self._exception(code, 'illegal_data_value', 'a read of %d registers (1..125)' % count)
+        values = self._registers(address, count)
+        if values is None:
+            blocks = ', '.join('%d..%d' % (b['first'], b['first'] + b['count'] - 1)
+                               for b in self.table['blocks'].values())
+            return self._exception(code, 'illegal_data_address', 'a read of %d registers at %d is outside the '
+                                   "sensor's registers (%s)" % (count, address, blocks))
+        return struct.pack('>BB%dH' % count, code, 2 * count, *values), None
+
+    _read_holding_registers = _read_input_registers = _read_registers
+
+    def _write_multiple_registers(self, code, body):
+        if len(body) < 5 or len(body) != 5 + body[4]:
+            return self._exception(code, 'illegal_data_value', 'a write whose length does not match its byte count')
+        address, count, size = struct.unpack('>HHB', body[:5])
+        if not 1 <= count <= 123 or size != 2 * count:
+            return self._exception(code, 'illegal_data_value', 'a write of %d registers in %d bytes' % (count, size))
+        register, start = self.table['stream_register'], self.table['stream_start']
+        if (address, count) != (register, 1):
+            return self._exception(code, 'illegal_data_address', 'a write of %d registers at %d: the sensor takes '
+                                   'writes only to register %d, the stream\'s start' % (count, address, register))
+        value = struct.unpack('>H', body[5:7])[0]
+        if value != start:
+            return self._exception(code, 'illegal_data_value', 'register %d takes 0x%04X (start the stream), not '
+                                   '0x%04X' % (register, start, value))
+        self._start_pending = True
+        return struct.pack('>BHH', code, address, count), None
+
+
+def _crc_function():
+    """bytes -> the two CRC bytes of a Modbus RTU frame (least significant first), from modbus_tk."""
+    from modbus_tk import utils
+    return lambda data: struct.pack('>H', utils.calculate_crc(data))
+
+
+def serve(table, identity, log, link=None):
+    """The FT 300's line on a pseudo-terminal, serving in a thread of its own: (Ft300Line, PseudoTerminal)."""
+    sensor = Ft300Line(table, identity, log)
+    line = PseudoTerminal(sensor, table['frame_gap'], link, "the FT 300's")
+    sensor.send = line.send
+    return sensor, line.start('FT 300 Modbus RTU')
