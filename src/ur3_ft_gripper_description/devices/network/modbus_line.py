@@ -14,6 +14,9 @@ import tty
 from . import listen
 
 MAX_ADU = 260  # the longest Modbus frame (TCP: 7 header bytes and a 253-byte PDU)
+# What waits for a client that reads slowly (bytes): four wall-clock seconds of the FT 300's stream at ten
+# times real time. A client that reads nothing loses what comes beyond, whole writes at a time.
+OUTBOX_BYTES = 1 << 16
 
 
 class ModbusUnavailable(RuntimeError):
@@ -56,7 +59,9 @@ class PseudoTerminal(object):
                                          'you can write, e.g. /tmp/ttyRobotiq' % (link, whose, exc.strerror or exc)) \
                     from None
         self._stop = os.pipe()
+        os.set_blocking(self._stop[1], False)
         self._sending = threading.Lock()  # replies from this thread, a stream from the device's
+        self._outbox = bytearray()
         os.set_blocking(self.master, False)
 
     def start(self, name):
@@ -67,9 +72,15 @@ class PseudoTerminal(object):
     def serve_forever(self):
         frame = b''
         while True:
-            ready, _, _ = select.select([self.master, self._stop[0]], [], [], self.frame_gap if frame else None)
-            if self._stop[0] in ready:
+            with self._sending:
+                waiting = bool(self._outbox)
+            ready, writable, _ = select.select([self.master, self._stop[0]], [self.master] if waiting else [], [],
+                                               self.frame_gap if frame else None)
+            if self._stop[0] in ready and b'x' in os.read(self._stop[0], 4096):
                 return
+            if writable:
+                with self._sending:
+                    self._flush()
             if self.master in ready:
                 try:
                     frame += os.read(self.master, MAX_ADU)
@@ -79,23 +90,40 @@ class PseudoTerminal(object):
                     raise
                 if len(frame) <= MAX_ADU:
                     continue
+            elif ready or writable or not frame:
+                continue  # woken for what send() left, not by the silence after a frame
             # The silence after a frame, or more bytes than a frame has: the device takes them.
             response, frame = self.device.answer(frame), b''
             if response:
                 self.send(response)
 
     def send(self, data):
-        """Write `data` to the client, whole; dropped when the client has not read what came before (a device
-        on a line sends whether or not anybody listens)."""
+        """Write `data` to the client, whole and in order: what the line cannot take now waits (up to
+        OUTBOX_BYTES) and goes out as the client reads; beyond that it is dropped whole, as a device on a line
+        sends whether or not anybody listens."""
         with self._sending:
+            if len(self._outbox) + len(data) <= OUTBOX_BYTES:
+                self._outbox += data
+            self._flush()
+        if self._outbox:
             try:
-                os.write(self.master, data)
+                os.write(self._stop[1], b'w')  # the serving thread waits for the line to take the rest
             except BlockingIOError:
-                pass
+                pass  # it has been woken already
+
+    def _flush(self):
+        try:
+            written = os.write(self.master, self._outbox) if self._outbox else 0
+        except BlockingIOError:
+            return
+        del self._outbox[:written]
 
     def shutdown(self):
         """The serving thread ends, and the link goes: a client can no longer open the port."""
-        os.write(self._stop[1], b'x')
+        try:
+            os.write(self._stop[1], b'x')
+        except BlockingIOError:
+            pass  # a pipe full of wake-ups: the thread is not reading, it has ended
         self._unlink()
 
     def close(self):
