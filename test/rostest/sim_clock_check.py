@@ -5,7 +5,9 @@ At real_time_factor 0 the cell runs as fast as the machine allows; nothing
 of what the drivers' interfaces publish may be lost or repeated for it:
 rq_sensor's stream carries one reading per 10 ms of simulated time, stamped
 with it; joint_state_controller one joint state per control period; the
-2F-140 one status per 20 ms. The real-time factor the arm's node reports is
+2F-140 one status per 20 ms; and the FT 300's data stream on its serial line
+(rq_sensor's start, frames as its manual lays them out) one frame per
+reading, the same values as the topic's message of that reading. The real-time factor the arm's node reports is
 checked against what /clock and this process's wall clock show over the
 same window.
 
@@ -17,6 +19,8 @@ After them a program still runs, and the node refused the ones that do not
 compile, each on one line.
 """
 import bisect
+import os
+import struct
 import threading
 import time
 import unittest
@@ -105,6 +109,7 @@ class Streams(object):
     def __init__(self):
         self.lock = threading.Lock()
         self.clock, self.arm, self.wrench, self.gripper, self.diagnostics = [], [], [], [], []
+        self.wrench_counts = []  # (stamp, the reading in the stream's counts)
         # The newest simulated time (s) any stream has shown this node: a status's time of receipt. Not
         # rospy.get_time() alone: its /clock can fall behind the other streams' threads, by 0.3 s once
         # at 500 Hz beside four busy processes, and make statuses look early.
@@ -129,8 +134,12 @@ class Streams(object):
                 self.newest = max(self.newest, msg.header.stamp.to_sec())
 
     def _on_wrench(self, msg):
+        force, torque = msg.wrench.force, msg.wrench.torque
+        counts = (round(force.x * 100), round(force.y * 100), round(force.z * 100), round(torque.x * 1000),
+                  round(torque.y * 1000), round(torque.z * 1000))  # the stream's 0.01 N and 0.001 N m
         with self.lock:
             self.wrench.append(msg.header.stamp.to_nsec())
+            self.wrench_counts.append((msg.header.stamp.to_nsec(), counts))
             self.newest = max(self.newest, msg.header.stamp.to_sec())
 
     def _on_gripper(self, msg):
@@ -164,6 +173,55 @@ class Streams(object):
                     self.diagnostics.append((time.monotonic(), float(values['real-time factor'])))
 
 
+class SerialStream(object):
+    """The FT 300's data stream on its serial line, as rq_sensor starts it and reads it: every byte, kept by a
+    thread of its own until stop()."""
+
+    START = bytes.fromhex('09 10 01 9A 00 01 02 02 00 CD CA')  # rq_sensor's write of 0x0200 to register 410
+    STARTED = bytes.fromhex('09 10 01 9A 00 01 21 52')
+
+    def __init__(self, path):
+        import serial
+        rostest_helpers.wait_for(lambda: os.path.exists(path), 'the FT 300 serial port at %s' % path)
+        self.port = serial.Serial(path, 19200, timeout=rostest_helpers.TIMEOUT)
+        self.port.write(self.START)
+        self.echo = self.port.read(len(self.STARTED))
+        self.port.timeout = 0.05
+        self.data = bytearray()
+        self.stopping = threading.Event()
+        self.thread = threading.Thread(target=self._read, daemon=True)
+        self.thread.start()
+
+    def _read(self):
+        while not self.stopping.is_set():
+            self.data += self.port.read(4096)
+
+    def stop(self):
+        self.stopping.set()
+        self.thread.join()
+        self.port.write(b'\xff' * 50)
+        self.port.close()
+
+    def frames(self):
+        """[(counts, CRC valid)] of the whole frames read: 0x20 0x4E, six int16 least significant byte first, and
+        the CRC-16 of the Modbus specification, least significant byte first."""
+        frames = []
+        for start in range(0, len(self.data) - 15, 16):
+            frame = bytes(self.data[start:start + 16])
+            frames.append((struct.unpack('<6h', frame[2:14]),
+                           frame[:2] == b'\x20\x4e' and crc16(frame[:14]) == struct.unpack('<H', frame[14:])[0]))
+        return frames
+
+
+def crc16(data):
+    crc = 0xFFFF
+    for byte in data:
+        crc ^= byte
+        for _ in range(8):
+            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
+    return crc
+
+
 def in_window(stamps_ns, start_ns, end_ns):
     return [s for s in stamps_ns if start_ns <= s < end_ns]
 
@@ -179,6 +237,7 @@ class SimClockTest(unittest.TestCase):
         rostest_helpers.wait_for(lambda: cls.streams.arm and cls.streams.wrench and cls.streams.gripper,
                                  'joint_states, robotiq_ft_wrench and Robotiq2FGripperRobotInput')
         cls.rosout = rostest_helpers.Recorder('/rosout', Log)
+        cls.stream = SerialStream(rospy.get_param('~ft_serial_port'))
         cls.bad_programs = BadPrograms(SPAN)
         # A simulated second for the subscribers' threads to drain what came while the mutants were made.
         rospy.sleep(1.0)
@@ -193,6 +252,7 @@ class SimClockTest(unittest.TestCase):
         after = GRIPPER_REACH + 1.0
         rostest_helpers.wait_for(lambda: rospy.get_time() > cls.end + after, 'the end of the windows on /clock',
                                  timeout=rostest_helpers.TIMEOUT + 60)
+        cls.stream.stop()
         # The factor is reported once a wall-clock second, over the last three: enough reports to check.
         rostest_helpers.wait_for(lambda: len(cls.streams.factors_beside_clock()) >= REPORTS,
                                  '%d reports of the real-time factor on /diagnostics with /clock beside them'
@@ -203,6 +263,20 @@ class SimClockTest(unittest.TestCase):
         self.assertEqual(len(stamps), round(SPAN / FT_PERIOD), 'readings in %g simulated s' % SPAN)
         gaps = {round((b - a) * 1e-9, 9) for a, b in zip(stamps, stamps[1:])}
         self.assertEqual(gaps, {FT_PERIOD}, 'the gaps between consecutive stamps (s)')
+
+    def test_the_serial_stream_carries_each_reading_of_the_window_frame_for_message(self):
+        self.assertEqual(self.stream.echo, SerialStream.STARTED)
+        frames = self.stream.frames()
+        self.assertTrue(all(valid for _, valid in frames), 'frames with a bad header or CRC')
+        with self.streams.lock:
+            published = sorted(self.streams.wrench_counts)
+        values = [counts for _, counts in published]
+        first = values.index(frames[0][0])  # the readings carry the sensor's noise: each is its own
+        streamed = [counts for counts, _ in frames]
+        self.assertEqual(values[first:first + len(streamed)], streamed, 'the frames against the messages')
+        stamps = [stamp for stamp, _ in published[first:first + len(streamed)]]
+        # Every reading of the window went out as a frame: 1,000 in 10 simulated seconds.
+        self.assertEqual(len(in_window(stamps, self.start_ns, self.end_ns)), round(SPAN / FT_PERIOD))
 
     def test_joint_states_come_once_per_control_period(self):
         period = 1.0 / self.loop_hz
