@@ -13,6 +13,7 @@ import argparse
 import os
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import xml.dom.minidom
@@ -137,14 +138,49 @@ def gaps(values):
 
 # (~rate, subscribe to both topics): at 100 Hz also the wrench alone, what the
 # single-topic node published, so that one run compares the two.
-FT300_RUNS = ((100, False), (100, True), (500, True), (1000, True))
+# (rate, both topics subscribed, its serial line streaming to a reader beside them)
+FT300_RUNS = ((100, False, False), (100, True, False), (100, True, True), (500, True, False), (1000, True, False))
+# rq_sensor's start of the data stream (write 0x0200 to register 410), and the stop.
+START_STREAM = bytes.fromhex('09 10 01 9A 00 01 02 02 00 CD CA')
+STOP_STREAM = b'\xff' * 50
 
 
-def bench_ft300(rate, seconds, rospy, both=True):
-    """Rate, gaps and CPU of ft300_sim; `both`: a subscriber on robotiq_ft_sensor too, not only the wrench."""
+class SerialReader(object):
+    """A client of a device's serial line (the pseudo-terminal's path): writes `request`, then reads and
+    counts what comes, in a thread, until stop()."""
+
+    def __init__(self, path, baudrate, request, every=None):
+        import serial
+        benchlib.wait_for(lambda: os.path.exists(path), 'the serial line at %s' % path, 30)
+        self.port = serial.Serial(path, baudrate, timeout=min(0.05, every or 0.05) / 4)
+        self.request, self.every, self.received = request, every, 0
+        self.stopping = threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        self.port.write(self.request)
+        next_request = time.monotonic() + (self.every or 0.0)
+        while not self.stopping.is_set():
+            self.received += len(self.port.read(4096))
+            if self.every and time.monotonic() >= next_request:
+                self.port.write(self.request)
+                next_request += self.every
+
+    def stop(self, last=b''):
+        self.stopping.set()
+        self.thread.join()
+        self.port.write(last)
+        self.port.close()
+
+
+def bench_ft300(rate, seconds, rospy, both=True, serial=False):
+    """Rate, gaps and CPU of ft300_sim; `both`: a subscriber on robotiq_ft_sensor too, not only the wrench;
+    `serial`: its serial line too, streaming to a reader as rq_sensor starts it."""
     from geometry_msgs.msg import WrenchStamped
     from robotiq_ft_sensor.msg import ft_sensor
-    name = 'ft300_bench_%d_%s' % (rate, 'both' if both else 'wrench')
+    name = 'ft300_bench_%d_%s%s' % (rate, 'both' if both else 'wrench', '_serial' if serial else '')
+    path = os.path.join(tempfile.gettempdir(), 'ttyFT300-%s-%d' % (name, os.getpid()))
     wrench, stream = Received(), Received()
     subscribers = [rospy.Subscriber('%s/robotiq_ft_wrench' % name, WrenchStamped, wrench.add,
                                     queue_size=10000, tcp_nodelay=True)]
@@ -152,15 +188,20 @@ def bench_ft300(rate, seconds, rospy, both=True):
         subscribers.append(rospy.Subscriber('%s/robotiq_ft_sensor' % name, ft_sensor, stream.add,
                                             queue_size=10000, tcp_nodelay=True))
     process = benchlib.node('ft300_sim', '__name:=robotiq_ft_sensor', '__ns:=/%s' % name,
-                            '_rate:=%g' % rate)
+                            '_rate:=%g' % rate, *(['_modbus_rtu_port:=' + path] if serial else []))
+    reader = None
     try:
         benchlib.wait_for(lambda: wrench.last() and (stream.last() or not both),
                           'ft300_sim at %g Hz on %s' % (rate, 'both topics' if both else 'the wrench'), 30)
+        if serial:
+            reader = SerialReader(path, 19200, START_STREAM)
         time.sleep(1.0)  # warm-up
-        cpu0, t0 = benchlib.cpu_seconds(process.pid), time.monotonic()
+        cpu0, t0, bytes0 = benchlib.cpu_seconds(process.pid), time.monotonic(), reader.received if reader else 0
         time.sleep(seconds)
-        cpu1, t1 = benchlib.cpu_seconds(process.pid), time.monotonic()
+        cpu1, t1, bytes1 = benchlib.cpu_seconds(process.pid), time.monotonic(), reader.received if reader else 0
     finally:
+        if reader is not None:
+            reader.stop(STOP_STREAM)
         benchlib.stop(process)
         for subscriber in subscribers:
             subscriber.unregister()
@@ -168,7 +209,8 @@ def bench_ft300(rate, seconds, rospy, both=True):
     stamps = [m.header.stamp.to_sec() for _, m in window]
     # ft_sensor has no header: its gaps are as received.
     stream_window = [r for r, _ in stream.since(t0) if r <= t1]
-    return dict(rate=rate, both=both, achieved=len(window) / (t1 - t0),
+    return dict(rate=rate, both=both, serial=serial, frames=(bytes1 - bytes0) / 16.0 / (t1 - t0) if serial else None,
+                achieved=len(window) / (t1 - t0),
                 achieved_stream=len(stream_window) / (t1 - t0) if both else None,
                 p99_stamp=benchlib.percentile(gaps(stamps), 99),
                 p99_received=benchlib.percentile(gaps([r for r, _ in window]), 99),
@@ -226,6 +268,35 @@ def bench_gripper(commands, rospy):
         subscriber.unregister()
         publisher.unregister()
     return latencies
+
+
+# Robotiq's node's status read (function 3, three registers at 0x07D0, slave 9) and its reply's length.
+READ_GRIPPER_STATUS = bytes.fromhex('09 03 07 D0 00 03 04 0E')
+GRIPPER_REPLY_BYTES = 11
+
+
+def bench_gripper_cpu(seconds, rospy):
+    """CPU of gripper_sim (% of a core) with its Modbus RTU line idle, and with a client reading the status at
+    50 Hz; and the replies it got a second."""
+    path = os.path.join(tempfile.gettempdir(), 'ttyRobotiq2F-bench-%d' % os.getpid())
+    process = benchlib.node('gripper_sim', '__name:=robotiq2FGripper', '__ns:=/gripper_cpu_bench',
+                            '_modbus_rtu_port:=' + path)
+    try:
+        benchlib.wait_for(lambda: os.path.exists(path), 'gripper_sim\'s serial line', 30)
+        time.sleep(1.0)
+        cpu0, t0 = benchlib.cpu_seconds(process.pid), time.monotonic()
+        time.sleep(seconds)
+        idle = 100.0 * (benchlib.cpu_seconds(process.pid) - cpu0) / (time.monotonic() - t0)
+        reader = SerialReader(path, 115200, READ_GRIPPER_STATUS, every=0.02)
+        time.sleep(1.0)
+        cpu0, t0, bytes0 = benchlib.cpu_seconds(process.pid), time.monotonic(), reader.received
+        time.sleep(seconds)
+        cpu1, t1, bytes1 = benchlib.cpu_seconds(process.pid), time.monotonic(), reader.received
+        reader.stop()
+    finally:
+        benchlib.stop(process)
+    return dict(idle=idle, modbus=100.0 * (cpu1 - cpu0) / (t1 - t0),
+                replies=(bytes1 - bytes0) / float(GRIPPER_REPLY_BYTES) / (t1 - t0))
 
 
 # -- report -------------------------------------------------------------------------
@@ -295,14 +366,18 @@ def report(r):
     ]
     for f in r['ft300']:
         goal = ''
-        if f['rate'] == 100:
+        if f['rate'] == 100 and f.get('serial'):
+            ok = f['p99_stamp'] < 0.012 and f['cpu'] < 10.0
+            goal = 'p99 < 12 ms, CPU < 10 %%: %s' % ('met' if ok else 'NOT met')
+        elif f['rate'] == 100:
             ok = f['p99_stamp'] < 0.012 and f['cpu'] < 5.0
             goal = 'p99 < 12 ms, CPU < 5 %%: %s' % ('met' if ok else 'NOT met')
         elif f['rate'] == 1000:
             goal = 'sustained: %s' % ('met' if f['achieved'] >= 0.95 * 1000 else 'NOT met')
         both = f['both']
         lines.append('| %d | %s | %.1f / %s | %.1f | %.1f / %s | %.1f | %.1f | %s |' % (
-            f['rate'], 'both' if both else 'wrench only', f['achieved'],
+            f['rate'], ('both + serial stream (%.1f frames/s)' % f['frames'] if f.get('serial') else 'both')
+            if both else 'wrench only', f['achieved'],
             '%.1f' % f['achieved_stream'] if both else '-', 1e3 * f['p99_stamp'],
             1e3 * f['p99_received'], '%.1f' % (1e3 * f['p99_stream']) if both else '-',
             1e3 * f['max_stamp'], f['cpu'], goal))
@@ -319,6 +394,19 @@ def report(r):
             1e3 * benchlib.median(lat), 1e3 * benchlib.percentile(lat, 95), 1e3 * max(lat),
             'met' if benchlib.percentile(lat, 95) < 0.040 else 'NOT met (p95)'),
     ]
+    cpu = r.get('gripper_cpu')
+    if cpu:
+        lines += [
+            '',
+            '### gripper_sim with its Modbus RTU line (%g s each, after 1 s warm-up; a client reading the status '
+            'at 50 Hz as Robotiq\'s node polls it, beside none)' % r['ft_seconds'],
+            '',
+            '| CPU % of one core, no client | with the Modbus RTU client | ratio | replies/s | goal |',
+            '| ---: | ---: | ---: | ---: | --- |',
+            '| %.1f | %.1f | %.2f | %.1f | < 10 %%: %s |' % (
+                cpu['idle'], cpu['modbus'], cpu['modbus'] / cpu['idle'] if cpu['idle'] else float('nan'),
+                cpu['replies'], 'met' if cpu['modbus'] < 10.0 else 'NOT met'),
+        ]
     return '\n'.join(lines)
 
 
@@ -373,9 +461,12 @@ def main(argv=None):
             benchlib.wait_for(lambda: rospy.has_param('robot_description'), 'robot_description', 60)
             results['ft_seconds'] = 2.0 if args.short else 10.0
             results['ft300'] = []
-            for rate, both in FT300_RUNS:
-                say('ft300_sim at %d Hz, %s' % (rate, 'both topics' if both else 'wrench only'))
-                results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy, both))
+            for rate, both, serial in FT300_RUNS:
+                say('ft300_sim at %d Hz, %s%s' % (rate, 'both topics' if both else 'wrench only',
+                                                  ' and its serial stream' if serial else ''))
+                results['ft300'].append(bench_ft300(rate, results['ft_seconds'], rospy, both, serial))
+            say('gripper_sim CPU, without and with a Modbus RTU client')
+            results['gripper_cpu'] = bench_gripper_cpu(results['ft_seconds'], rospy)
             say('gripper_sim latency')
             results['gripper'] = bench_gripper(6 if args.short else 40, rospy)
         finally:
