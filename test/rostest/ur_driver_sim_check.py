@@ -501,36 +501,60 @@ class RobotTest(DriverTestBase):
         twist = Twist()
         twist.linear.z = 0.05
         twist.angular.z = 0.2
-        # The distance is the speed times how long the twist was held, as this test measured it
-        # (its 50 Hz loop may run late on a loaded machine: the robot is judged, not the loop).
-        held = hold_command(self.driver.twist, twist, Twist(), 1.0)
+        model = kinematics.Model(rospy.get_param('robot_description'))
+        base, tool0 = self.prefix + 'base', self.prefix + 'tool0'
+        recorder = rostest_helpers.Recorder('joint_states', JointState)
+        began = rospy.get_time()
+        hold_command(self.driver.twist, twist, Twist(), 1.0)
+        ended = rospy.get_time()
         time.sleep(0.3)
         end = self.tool()
+        # The speeds as the robot's own joint states show them (their stamps): the median over consecutive
+        # states of the middle of the hold. On a loaded machine the kinematic arm drops the time of a cycle
+        # it ran very late, as a real controller would not: one pair of states, not the median.
+        states = [m for m in recorder.since(0.0) if self.prefix + 'shoulder_pan_joint' in m.name and
+                  began + 0.2 <= m.header.stamp.to_sec() <= ended - 0.1]
+        poses = [(m.header.stamp.to_sec(), model.transform(base, tool0, dict(zip(m.name, m.position))))
+                 for m in states]
+        self.assertGreater(len(poses), 20, 'joint states in the middle of the hold')
+        rise = median_rate([(t, pose[2, 3]) for t, pose in poses])
+        yaw = median_rate([(t, math.atan2(pose[:3, :3].dot(poses[0][1][:3, :3].T)[1, 0],
+                                          pose[:3, :3].dot(poses[0][1][:3, :3].T)[0, 0])) for t, pose in poses])
+        self.assertAlmostEqual(rise, 0.05, delta=0.0025)
+        self.assertAlmostEqual(yaw, 0.2, delta=0.01)
         moved = end[:3, 3] - start[:3, 3]
-        self.assertAlmostEqual(moved[2], 0.05 * held, delta=0.006)
-        self.assertLess(np.linalg.norm(moved[:2]), 0.005)
+        # Up, and nothing but up, however long the twist was held.
+        self.assertGreater(moved[2], 0.02)
+        self.assertLess(np.linalg.norm(moved[:2]), 0.1 * moved[2])
         # speedl turns the tool about the base's z axis through the tool's own origin.
         turn = end[:3, :3].dot(start[:3, :3].T)
-        self.assertAlmostEqual(math.atan2(turn[1, 0], turn[0, 0]), 0.2 * held, delta=0.03)
         np.testing.assert_allclose(turn[:, 2], [0.0, 0.0, 1.0], atol=1e-3)
         self.driver.only('joint_group_vel_controller')
-        before, _ = arm_positions(self.prefix)
         rostest_helpers.wait_for_subscribers(self.driver.velocity)
-        held = hold_command(self.driver.velocity, Float64MultiArray(data=[0.1, 0, 0, 0, 0, 0]),
-                            Float64MultiArray(data=[0.0] * 6), 1.0)
-        time.sleep(0.3)
-        after, _ = arm_positions(self.prefix)
-        self.assertAlmostEqual(after[0] - before[0], 0.1 * held, delta=0.012)
+        began = rospy.get_time()
+        hold_command(self.driver.velocity, Float64MultiArray(data=[0.1, 0, 0, 0, 0, 0]),
+                     Float64MultiArray(data=[0.0] * 6), 1.0)
+        ended = rospy.get_time()
+        pan = [(m.header.stamp.to_sec(), m.position[m.name.index(self.prefix + 'shoulder_pan_joint')])
+               for m in recorder.since(0.0) if self.prefix + 'shoulder_pan_joint' in m.name and
+               began + 0.2 <= m.header.stamp.to_sec() <= ended - 0.1]
+        self.assertGreater(len(pan), 20, 'joint states in the middle of the hold')
+        self.assertAlmostEqual(median_rate(pan), 0.1, delta=0.005)
+
+
+def median_rate(samples):
+    """The median rate of change of [(time, value)] between consecutive samples."""
+    rates = sorted((b - a) / (tb - ta) for (ta, a), (tb, b) in zip(samples, samples[1:]) if tb > ta)
+    return rates[len(rates) // 2]
 
 
 def hold_command(publisher, command, release, seconds):
-    """Publish `command` at 50 Hz for `seconds`, then `release`; how long (s) `command` was held."""
+    """Publish `command` at 50 Hz for `seconds` (wall clock), then `release`."""
     start = time.monotonic()
     while time.monotonic() - start < seconds:
         publisher.publish(command)
         time.sleep(0.02)
     publisher.publish(release)
-    return time.monotonic() - start
 
 
 class GenerationTest(DriverTestBase):
