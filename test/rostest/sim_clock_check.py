@@ -36,6 +36,7 @@ from sensor_msgs.msg import JointState
 from std_msgs.msg import String
 
 from ur3_ft_gripper_testing import rostest_helpers, urscript_mutants
+from ur3_ft_gripper_testing.modbus_frames import valid_crc
 from ur3_ft_gripper_testing.ur_driver import HW
 
 # Ten simulated seconds of each stream, counted from a start well after the cell came up.
@@ -208,18 +209,8 @@ class SerialStream(object):
         frames = []
         for start in range(0, len(self.data) - 15, 16):
             frame = bytes(self.data[start:start + 16])
-            frames.append((struct.unpack('<6h', frame[2:14]),
-                           frame[:2] == b'\x20\x4e' and crc16(frame[:14]) == struct.unpack('<H', frame[14:])[0]))
+            frames.append((struct.unpack('<6h', frame[2:14]), frame[:2] == b'\x20\x4e' and valid_crc(frame)))
         return frames
-
-
-def crc16(data):
-    crc = 0xFFFF
-    for byte in data:
-        crc ^= byte
-        for _ in range(8):
-            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
-    return crc
 
 
 def in_window(stamps_ns, start_ns, end_ns):

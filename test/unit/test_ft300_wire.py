@@ -11,10 +11,10 @@ import struct
 import threading
 import time
 
-import minimalmodbus
 import pytest
 
 from ur3_ft_gripper_description.devices.network import ft300_wire, listen
+from ur3_ft_gripper_testing.modbus_frames import LineClient, crc_framed, garbage, valid_crc
 
 TABLE = ft300_wire.read_table()
 IDENTITY = dict(serial_number='SIM-0001', firmware_version='FTS-0.0.0', production_year='2026')
@@ -23,19 +23,6 @@ PROBE = bytes.fromhex('09 03 01 F4 00 01 C5 4C')
 START_STREAM = bytes.fromhex('09 10 01 9A 00 01 02 02 00 CD CA')
 STARTED = bytes.fromhex('09 10 01 9A 00 01 21 52')
 STOP_BURST = b'\xff' * 50
-
-
-def crc16(data):
-    crc = 0xFFFF
-    for byte in data:
-        crc ^= byte
-        for _ in range(8):
-            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
-    return crc
-
-
-def crc_framed(frame):
-    return frame + struct.pack('<H', crc16(frame))
 
 
 def signed(registers):
@@ -48,32 +35,18 @@ def stream_frames(data):
     for start in range(0, len(data) - len(data) % 16, 16):
         frame = data[start:start + 16]
         assert frame[:2] == b'\x20\x4e', frame.hex(' ')
-        assert crc16(frame[:14]) == struct.unpack('<H', frame[14:])[0], frame.hex(' ')
+        assert valid_crc(frame), frame.hex(' ')
         frames.append(struct.unpack('<6h', frame[2:14]))
     assert len(data) % 16 == 0, 'a partial frame: %d bytes' % len(data)
     return frames
 
 
-class Line(object):
+class Line(LineClient):
     def __init__(self, tmp_path):
         self.logged = []
         self.link = str(tmp_path / 'ttyFT300')
         self.sensor, self.port = ft300_wire.serve(TABLE, IDENTITY, self.logged.append, link=self.link)
-        self.client = minimalmodbus.Instrument(self.link, TABLE['slave_id'], mode=minimalmodbus.MODE_RTU)
-        self.client.serial.baudrate = TABLE['serial']['baudrate']
-        self.client.serial.timeout = 2.0
-        self.client.clear_buffers_before_each_transaction = True
-
-    def raw(self, frame, wait=0.3):
-        port = self.client.serial
-        if not port.is_open:
-            port.open()
-        port.reset_input_buffer()
-        port.write(frame)
-        port.timeout, port.inter_byte_timeout = wait, 0.05
-        reply = port.read(256)
-        port.timeout, port.inter_byte_timeout = 2.0, None
-        return reply
+        super().__init__(self.link, TABLE['slave_id'], TABLE['serial'], self.port)
 
     def read_exactly(self, size):
         port = self.client.serial
@@ -93,12 +66,6 @@ class Line(object):
                 return data
             data += chunk
 
-    def close(self):
-        self.client.serial.close()
-        self.port.shutdown()
-        self.port.close()
-
-
 @pytest.fixture
 def line(tmp_path):
     made = Line(tmp_path)
@@ -108,7 +75,7 @@ def line(tmp_path):
 
 def test_rq_sensors_probe_and_identity_reads_give_back_the_identity_in_its_formats(line):
     reply = line.raw(PROBE)
-    assert reply[:3] == bytes([9, 3, 2]) and crc16(reply[:-2]) == struct.unpack('<H', reply[-2:])[0]
+    assert reply[:3] == bytes([9, 3, 2]) and valid_crc(reply)
     assert chr(reply[3]) == 'F'  # rq_sensor takes any other first letter for no sensor
     firmware = line.client.read_registers(500, 3)
     data = struct.pack('>3H', *firmware)
@@ -198,13 +165,9 @@ def test_a_stop_without_a_stream_is_nothing(line):
 
 
 def test_seeded_garbage_never_stops_the_line(line):
-    rng = random.Random(20261128)
-    for _ in range(40):
-        frame = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 40)))
-        if rng.random() < 0.5:
-            frame = crc_framed(bytes([9]) + frame)
+    for frame in garbage(20261128, 40, 9):
         reply = line.raw(frame, wait=0.2)
-        assert reply == b'' or (reply[0] == 9 and crc16(reply[:-2]) == struct.unpack('<H', reply[-2:])[0]), reply
+        assert reply == b'' or (reply[0] == 9 and valid_crc(reply)), reply
     if line.sensor.streaming:  # a garbage write that happened to start it
         line.client.serial.write(STOP_BURST)
         time.sleep(0.1)

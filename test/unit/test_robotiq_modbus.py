@@ -12,13 +12,13 @@ import socket
 import struct
 import threading
 
-import minimalmodbus
 import pytest
 import serial
 
 from ur3_ft_gripper_description.devices import gripper_sim
 from ur3_ft_gripper_description.devices.network import listen, robotiq_modbus
 from test_sim_nodes import SPEC, gripper
+from ur3_ft_gripper_testing.modbus_frames import LineClient, crc_framed, garbage, valid_crc
 
 OBJECT_WIDTH = 0.06  # m between the pads
 TABLE = robotiq_modbus.read_table()
@@ -44,7 +44,7 @@ def request_registers(rACT=0, rGTO=0, rATR=0, rPR=0, rSP=0, rFR=0):
     return list(struct.unpack('>3H', data))
 
 
-class Line(object):
+class Line(LineClient):
     """The register machine behind a pseudo-terminal; advance(seconds) runs it as the node's loop does."""
 
     def __init__(self, tmp_path, **kwargs):
@@ -52,14 +52,7 @@ class Line(object):
         self.lock, self.logged = threading.Lock(), []
         self.link = str(tmp_path / 'ttyRobotiq2F')
         self.port = robotiq_modbus.serve_rtu(TABLE, self.machine, self.lock, self.logged.append, link=self.link)
-        settings = TABLE['rtu']['serial']
-        self.client = minimalmodbus.Instrument(self.link, TABLE['rtu']['slave_id'], mode=minimalmodbus.MODE_RTU)
-        self.client.serial.baudrate = settings['baudrate']
-        self.client.serial.bytesize = settings['bytesize']
-        self.client.serial.parity = settings['parity']
-        self.client.serial.stopbits = settings['stopbits']
-        self.client.serial.timeout = 2.0  # a reply on a busy machine; an awaited silence costs this much
-        self.client.clear_buffers_before_each_transaction = True
+        super().__init__(self.link, TABLE['rtu']['slave_id'], TABLE['rtu']['serial'], self.port)
 
     def advance(self, seconds, dt=0.02):
         for _ in range(int(round(seconds / dt))):
@@ -71,25 +64,6 @@ class Line(object):
 
     def command(self, **registers):
         self.client.write_registers(REQUEST, request_registers(**registers))
-
-    def raw(self, frame):
-        """Write `frame` as it is; what comes back within the client's timeout."""
-        port = self.client.serial
-        if not port.is_open:
-            port.open()
-        port.reset_input_buffer()
-        port.write(frame)
-        # A reply ends at its first pause; silence is what the first 0.3 s bring.
-        port.timeout, port.inter_byte_timeout = 0.3, 0.05
-        reply = port.read(256)
-        port.timeout, port.inter_byte_timeout = 2.0, None
-        return reply
-
-    def close(self):
-        self.client.serial.close()
-        self.port.shutdown()
-        self.port.close()
-
 
 @pytest.fixture
 def line(tmp_path):
@@ -148,25 +122,6 @@ def test_function_23_writes_then_reads(line):
     assert line.machine.command['rACT'] == 1
 
 
-def crc_framed(frame):
-    """`frame` with its Modbus CRC (CRC-16, polynomial 0xA001 reflected, initial 0xFFFF, low byte first), as the
-    protocol's specification computes it."""
-    return frame + struct.pack('<H', crc16(frame))
-
-
-def crc16(data):
-    crc = 0xFFFF
-    for byte in data:
-        crc ^= byte
-        for _ in range(8):
-            crc = (crc >> 1) ^ 0xA001 if crc & 1 else crc >> 1
-    return crc
-
-
-def valid_crc(frame):
-    return crc16(frame[:-2]) == struct.unpack('<H', frame[-2:])[0]
-
-
 @pytest.mark.parametrize('pdu, code, problem', [
     (bytes([5]) + struct.pack('>HH', 0, 0xFF00), 1, 'function code 5 is not one the gripper answers'),
     (bytes([4]) + struct.pack('>HH', 0, 3), 2, 'a read of 3 registers at 0x0000 is outside'),
@@ -197,12 +152,7 @@ def test_a_frame_for_someone_else_or_broken_gets_silence_and_one_line(line, fram
 
 
 def test_seeded_garbage_never_stops_the_line(line):
-    import random
-    rng = random.Random(20261128)
-    for _ in range(40):
-        frame = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 40)))
-        if rng.random() < 0.5:
-            frame = crc_framed(bytes([9]) + frame)
+    for frame in garbage(20261128, 40, 9):
         reply = line.raw(frame)
         assert reply == b'' or (reply[0] == 9 and valid_crc(reply)), reply
     assert len(line.logged) <= 40

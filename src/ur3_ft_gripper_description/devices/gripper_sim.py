@@ -72,7 +72,7 @@ import time
 
 from ur3_ft_gripper_description.devices import gripper_model, node_loop, sim_params
 from ur3_ft_gripper_description.devices.physics import link
-from ur3_ft_gripper_description.devices.network import listen, robotiq_modbus, robotiq_urcap
+from ur3_ft_gripper_description.devices.network import listen, modbus_line, robotiq_modbus, robotiq_urcap
 
 # A kind of nonsense register value is warned about at most once per this many seconds.
 RATE_LIMIT = 10.0
@@ -443,7 +443,7 @@ def start_urcap_socket(address, gripper, lock, log, port=None):
 
 def start_modbus_faces(get_param, gripper, lock, log):
     """The Modbus faces the parameters ask for, serving in threads of their own: [(what, where, server)];
-    listen.ListenError or robotiq_modbus.ModbusUnavailable (one line) when one cannot start."""
+    listen.ListenError or modbus_line.ModbusUnavailable (one line) when one cannot start."""
     port = sim_params.read(get_param, PARAMETERS, '~modbus_rtu_port')
     address = sim_params.read(get_param, PARAMETERS, '~modbus_tcp_address')
     if not (port or address):
@@ -511,7 +511,7 @@ def run(rospy):
         rospy.loginfo("gripper_sim: the gripper URCap's socket listens on %s:%d", *server.server_address[:2])
     try:
         faces = start_modbus_faces(rospy.get_param, gripper, lock, rospy.logwarn)
-    except (listen.ListenError, robotiq_modbus.ModbusUnavailable, sim_params.ParamError) as exc:
+    except (listen.ListenError, modbus_line.ModbusUnavailable, sim_params.ParamError) as exc:
         rospy.logfatal('gripper_sim: %s', exc)
         return 1
     for what, where, face in faces:

@@ -21,7 +21,7 @@ import threading
 import yaml
 
 from ..sim_params import PackageFile
-from .modbus_line import MAX_ADU, PseudoTerminal, framings
+from .modbus_line import PseudoTerminal, RegisterDevice, RtuSlave
 
 TABLE_FILE = PackageFile('config/robotiq_ft300_modbus.yaml')
 COUNT_MIN, COUNT_MAX = -32768, 32767
@@ -67,29 +67,63 @@ def identity_registers(table, identity):
             for i, value in enumerate(registers)}
 
 
+class Ft300Registers(RegisterDevice):
+    """The sensor's registers: the last reading's counts (`counts`, under `lock`), its identity, and the
+    stream's start, which sets `start_pending` for the line to act on once the reply is out."""
+
+    who = 'the sensor'
+
+    def __init__(self, table, identity, lock):
+        super().__init__(table)
+        self.blocks = table['blocks']
+        self.fixed = identity_registers(table, identity)
+        self.stream_register, self.stream_start = table['stream_register'], table['stream_start']
+        self.lock = lock
+        self.counts = [0] * 6
+        self.start_pending = False
+
+    def read(self, address, count):
+        wrench = self.blocks['wrench']
+        if wrench['first'] <= address and address + count <= wrench['first'] + wrench['count']:
+            with self.lock:
+                counts = list(self.counts)
+            return [c & 0xFFFF for c in counts[address - wrench['first']:address - wrench['first'] + count]]
+        for block in self.blocks.values():
+            if block['first'] <= address and address + count <= block['first'] + block['count']:
+                return [self.fixed[address + i] for i in range(count)]
+        return None
+
+    def write(self, address, values):
+        if (address, len(values)) != (self.stream_register, 1):
+            return 'illegal_data_address', ('a write of %d registers at %d: the sensor takes writes only to register '
+                                            '%d, the stream\'s start' % (len(values), address, self.stream_register))
+        if values[0] != self.stream_start:
+            return 'illegal_data_value', ('register %d takes 0x%04X (start the stream), not 0x%04X'
+                                          % (self.stream_register, self.stream_start, values[0]))
+        self.start_pending = True
+        return None
+
+    def outside(self, what, address, count, writing):
+        blocks = ', '.join('%d..%d' % (b['first'], b['first'] + b['count'] - 1) for b in self.blocks.values())
+        return "%s %d registers at %d is outside the sensor's registers (%s)" % (what, count, address, blocks)
+
+
 class Ft300Line(object):
     """The sensor's side of the line: answer(bytes) -> reply bytes for what the client sent, reading(values)
     for each reading the node publishes. `send(bytes)` writes to the client (the line's)."""
 
     def __init__(self, table, identity, log):
-        self.query_class = framings()[0]
+        self.lock = threading.Lock()
+        self.registers = Ft300Registers(table, identity, self.lock)
+        self.modbus = RtuSlave(self.registers, table['slave_id'], 'FT 300 Modbus RTU', log)  # the library first
         self.crc = _crc_function()
-        self.table, self.log = table, log
-        self.slave_id = table['slave_id']
-        self.codes = {int(code): name for code, name in table['function_codes'].items()}
-        self.exceptions = table['exceptions']
-        self.fixed = identity_registers(table, identity)
         stream = table['stream']
         self.header = bytes(stream['header'])
         self.resolution = [stream['force_resolution']] * 3 + [stream['torque_resolution']] * 3
         self.stop_byte, self.stop_count = stream['stop_byte'], stream['stop_count']
-        self.lock = threading.Lock()
-        self.counts = [0] * 6
         self.streaming = False
         self._stop_run = 0
-        self._start_pending = False
         self.send = None
-        self.frames_sent = 0
 
     # -- the readings -------------------------------------------------------------------
 
@@ -98,10 +132,9 @@ class Ft300Line(object):
         it: the force registers hold it, and a streaming sensor sends its frame."""
         counts = [min(max(int(round(v / r)), COUNT_MIN), COUNT_MAX) for v, r in zip(values, self.resolution)]
         with self.lock:
-            self.counts = counts
+            self.registers.counts = counts
             if not self.streaming or self.send is None:
                 return
-            self.frames_sent += 1
         self.send(self.frame(counts))
 
     def frame(self, counts):
@@ -117,30 +150,12 @@ class Ft300Line(object):
                 return b''
         if data.count(self.stop_byte) == len(data):
             return b''  # a stop sent to a sensor that is not streaming: nothing to stop
-        if len(data) > MAX_ADU:
-            self.log('FT 300 Modbus RTU: %d bytes without a pause, longer than any frame; dropped' % len(data))
-            return b''
-        query = self.query_class()
-        try:
-            slave, pdu = query.parse_request(data)
-        except Exception as exc:  # modbus_tk's invalid-request error: the frame is not a Modbus RTU frame
-            self.log('FT 300 Modbus RTU: a frame the sensor cannot read (%s): %s; no reply, as the sensor gives none'
-                     % (exc, data[:16].hex(' ')))
-            return b''
-        if slave != self.slave_id:
-            self.log('FT 300 Modbus RTU: a frame for slave %d, not the sensor\'s %d; no reply' % (slave, self.slave_id))
-            return b''
-        if not pdu:
-            self.log('FT 300 Modbus RTU: a frame with no function code; no reply')
-            return b''
-        response, problem = self.reply(pdu)
-        if problem is not None:
-            self.log('FT 300 Modbus RTU: %s; exception %d replied' % (problem, response[1]))
-        if not self._start_pending:
-            return query.build_response(response)
+        response = self.modbus.answer(data)
+        if not self.registers.start_pending:
+            return response
         with self.lock:  # the reply first, then the stream's frames (rq_sensor reads the reply, then frames)
-            self.send(query.build_response(response))
-            self.streaming, self._stop_run, self._start_pending = True, 0, False
+            self.send(response)
+            self.streaming, self._stop_run, self.registers.start_pending = True, 0, False
         return b''
 
     def _read_while_streaming(self, data):
@@ -149,65 +164,6 @@ class Ft300Line(object):
             if self._stop_run >= self.stop_count:
                 self.streaming, self._stop_run = False, 0
                 return  # what follows the stop in this burst is more of it
-
-    # -- Modbus requests ----------------------------------------------------------------
-
-    def _exception(self, code, name, problem):
-        return struct.pack('>BB', code | 0x80, self.exceptions[name]), problem
-
-    def reply(self, pdu):
-        """(response PDU, the problem in words or None) for one request PDU."""
-        code = pdu[0]
-        kind = self.codes.get(code)
-        if kind is None:
-            return self._exception(code, 'illegal_function', 'function code %d is not one the sensor answers (%s)'
-                                   % (code, ', '.join(str(c) for c in sorted(self.codes))))
-        return getattr(self, '_' + kind)(code, pdu[1:])
-
-    def _registers(self, address, count):
-        """The values of registers address .. address + count - 1, all in one block, or None."""
-        wrench = self.table['blocks']['wrench']
-        if wrench['first'] <= address and address + count <= wrench['first'] + wrench['count']:
-            with self.lock:
-                counts = list(self.counts)
-            return [c & 0xFFFF for c in counts[address - wrench['first']:address - wrench['first'] + count]]
-        for block in self.table['blocks'].values():
-            if block['first'] <= address and address + count <= block['first'] + block['count']:
-                return [self.fixed[address + i] for i in range(count)]
-        return None
-
-    def _read_registers(self, code, body):
-        if len(body) != 4:
-            return self._exception(code, 'illegal_data_value', 'a read of %d bytes, not 4' % len(body))
-        address, count = struct.unpack('>HH', body)
-        if not 1 <= count <= 125:
-            return self._exception(code, 'illegal_data_value', 'a read of %d registers (1..125)' % count)
-        values = self._registers(address, count)
-        if values is None:
-            blocks = ', '.join('%d..%d' % (b['first'], b['first'] + b['count'] - 1)
-                               for b in self.table['blocks'].values())
-            return self._exception(code, 'illegal_data_address', 'a read of %d registers at %d is outside the '
-                                   "sensor's registers (%s)" % (count, address, blocks))
-        return struct.pack('>BB%dH' % count, code, 2 * count, *values), None
-
-    _read_holding_registers = _read_input_registers = _read_registers
-
-    def _write_multiple_registers(self, code, body):
-        if len(body) < 5 or len(body) != 5 + body[4]:
-            return self._exception(code, 'illegal_data_value', 'a write whose length does not match its byte count')
-        address, count, size = struct.unpack('>HHB', body[:5])
-        if not 1 <= count <= 123 or size != 2 * count:
-            return self._exception(code, 'illegal_data_value', 'a write of %d registers in %d bytes' % (count, size))
-        register, start = self.table['stream_register'], self.table['stream_start']
-        if (address, count) != (register, 1):
-            return self._exception(code, 'illegal_data_address', 'a write of %d registers at %d: the sensor takes '
-                                   'writes only to register %d, the stream\'s start' % (count, address, register))
-        value = struct.unpack('>H', body[5:7])[0]
-        if value != start:
-            return self._exception(code, 'illegal_data_value', 'register %d takes 0x%04X (start the stream), not '
-                                   '0x%04X' % (register, start, value))
-        self._start_pending = True
-        return struct.pack('>BHH', code, address, count), None
 
 
 def _crc_function():

@@ -20,7 +20,7 @@ import yaml
 
 from ..sim_params import PackageFile
 from . import listen
-from .modbus_line import MAX_ADU, ModbusUnavailable, PseudoTerminal, framings
+from .modbus_line import MAX_ADU, PseudoTerminal, RegisterDevice, RtuSlave, framings
 
 TABLE_FILE = PackageFile('config/robotiq_2f_modbus.yaml')
 
@@ -49,12 +49,15 @@ class Layout(object):
         return {name: (data[byte] >> first) & mask for byte, name, first, mask in self.fields}
 
 
-class ModbusGripper(object):
+class ModbusGripper(RegisterDevice):
     """The gripper's Modbus application layer over `gripper` (command: dict of the request registers,
     set_command(dict), status() -> dict), each access under `lock`; `face` 'rtu' or 'tcp' picks the
     table's register addresses."""
 
+    who = 'the gripper'
+
     def __init__(self, table, gripper, lock, face):
+        super().__init__(table)
         self.gripper, self.lock = gripper, lock
         count = table['registers']
         self.request = Layout(table['request_bytes'], count)
@@ -62,10 +65,6 @@ class ModbusGripper(object):
         self.request_first = table[face]['request_register']
         self.status_first = table[face]['status_register']
         self.count = count
-        self.codes = {int(code): name for code, name in table['function_codes'].items()}
-        self.exceptions = table['exceptions']
-
-    # -- the blocks ---------------------------------------------------------------
 
     def _block(self, address, count):
         """'request' or 'status', the block that holds registers address .. address + count - 1, or None.
@@ -75,7 +74,7 @@ class ModbusGripper(object):
                 return name
         return None
 
-    def _read(self, address, count):
+    def read(self, address, count):
         block = self._block(address, count)
         if block is None:
             return None
@@ -85,121 +84,29 @@ class ModbusGripper(object):
                 self.request.registers(self.gripper.command)
         return registers[address - first:address - first + count]
 
-    def _write(self, address, values):
+    def write(self, address, values):
         first = self.request_first
         if not (first <= address and address + len(values) <= first + self.count):
-            return False
+            return 'illegal_data_address', self.outside('a write of', address, len(values), True)
         with self.lock:
             registers = self.request.registers(self.gripper.command)
             registers[address - first:address - first + len(values)] = values
             command = dict(self.gripper.command)
             command.update(self.request.values(registers))
             self.gripper.set_command(command)
-        return True
+        return None
 
-    # -- requests -----------------------------------------------------------------
-
-    def _exception(self, code, name, problem):
-        return struct.pack('>BB', code | 0x80, self.exceptions[name]), problem
-
-    def reply(self, pdu):
-        """(response PDU, the problem in words or None) for one request PDU."""
-        code = pdu[0]
-        kind = self.codes.get(code)
-        if kind is None:
-            return self._exception(code, 'illegal_function', 'function code %d is not one the gripper answers '
-                                   '(%s)' % (code, ', '.join(str(c) for c in sorted(self.codes))))
-        return getattr(self, '_' + kind)(code, pdu[1:])
-
-    def _read_registers(self, code, body):
-        if len(body) != 4:
-            return self._exception(code, 'illegal_data_value', 'a read of %d bytes, not 4' % len(body))
-        address, count = struct.unpack('>HH', body)
-        if not 1 <= count <= 125:
-            return self._exception(code, 'illegal_data_value', 'a read of %d registers (1..125)' % count)
-        registers = self._read(address, count)
-        if registers is None:
-            return self._exception(code, 'illegal_data_address', self._outside('a read of', address, count))
-        return struct.pack('>BB%dH' % count, code, 2 * count, *registers), None
-
-    _read_holding_registers = _read_input_registers = _read_registers
-
-    def _write_multiple_registers(self, code, body):
-        if len(body) < 5 or len(body) != 5 + body[4]:
-            return self._exception(code, 'illegal_data_value', 'a write whose length does not match its byte '
-                                   'count')
-        address, count, size = struct.unpack('>HHB', body[:5])
-        if not 1 <= count <= 123 or size != 2 * count:
-            return self._exception(code, 'illegal_data_value', 'a write of %d registers in %d bytes' % (count, size))
-        if not self._write(address, list(struct.unpack('>%dH' % count, body[5:]))):
-            return self._exception(code, 'illegal_data_address', self._outside('a write of', address, count,
-                                                                              writing=True))
-        return struct.pack('>BHH', code, address, count), None
-
-    def _read_write_multiple_registers(self, code, body):
-        if len(body) < 9 or len(body) != 9 + body[8]:
-            return self._exception(code, 'illegal_data_value', 'a read/write whose length does not match its '
-                                   'byte count')
-        read_address, read_count, write_address, write_count, size = struct.unpack('>HHHHB', body[:9])
-        if not 1 <= read_count <= 125 or not 1 <= write_count <= 121 or size != 2 * write_count:
-            return self._exception(code, 'illegal_data_value', 'a read of %d and a write of %d registers in %d '
-                                   'bytes' % (read_count, write_count, size))
-        if self._block(read_address, read_count) is None:
-            return self._exception(code, 'illegal_data_address', self._outside('a read of', read_address,
-                                                                              read_count))
-        # The write first, then the read (the protocol's order for function 23).
-        if not self._write(write_address, list(struct.unpack('>%dH' % write_count, body[9:]))):
-            return self._exception(code, 'illegal_data_address', self._outside('a write of', write_address,
-                                                                              write_count, writing=True))
-        registers = self._read(read_address, read_count)
-        return struct.pack('>BB%dH' % read_count, code, 2 * read_count, *registers), None
-
-    def _outside(self, what, address, count, writing=False):
+    def outside(self, what, address, count, writing):
         blocks = 'the requests at 0x%04X' % self.request_first if writing else \
             'the requests at 0x%04X or the status at 0x%04X' % (self.request_first, self.status_first)
         return '%s %d registers at 0x%04X is outside %s (%d registers each)' % (what, count, address, blocks,
                                                                              self.count)
 
 
-class RtuDevice(object):
-    """The gripper as a Modbus RTU slave: frames in, frames out (bytes), through modbus_tk's RTU query."""
-
-    def __init__(self, table, gripper, lock, log):
-        self.protocol = ModbusGripper(table, gripper, lock, 'rtu')
-        self.slave_id = table['rtu']['slave_id']
-        self.query_class = framings()[0]
-        self.log = log
-
-    def answer(self, frame):
-        """The response frame to one request frame, or b'' (none: a bad CRC, another slave, a broadcast)."""
-        if len(frame) > MAX_ADU:
-            self.log('2F-140 Modbus RTU: %d bytes without a pause, longer than any frame; dropped, as the gripper '
-                     'drops them' % len(frame))
-            return b''
-        query = self.query_class()
-        try:
-            slave, pdu = query.parse_request(frame)
-        except Exception as exc:  # modbus_tk's invalid-request error: the frame is not a Modbus RTU frame
-            self.log('2F-140 Modbus RTU: a frame the gripper cannot read (%s): %s; no reply, as the gripper gives '
-                     'none' % (exc, frame[:16].hex(' ')))
-            return b''
-        if slave != self.slave_id:
-            self.log('2F-140 Modbus RTU: a frame for slave %d, not the gripper\'s %d; no reply'
-                     % (slave, self.slave_id))
-            return b''
-        if not pdu:
-            self.log('2F-140 Modbus RTU: a frame with no function code; no reply')
-            return b''
-        response, problem = self.protocol.reply(pdu)
-        if problem is not None:
-            self.log('2F-140 Modbus RTU: %s; exception %d replied' % (problem, response[1]))
-        return query.build_response(response)
-
-
 def serve_rtu(table, gripper, lock, log, link=None):
     """The gripper on a pseudo-terminal, serving in a thread of its own; the PseudoTerminal."""
-    return PseudoTerminal(RtuDevice(table, gripper, lock, log), table['rtu']['frame_gap'], link,
-                          "the 2F-140's").start('2F-140 Modbus RTU')
+    device = RtuSlave(ModbusGripper(table, gripper, lock, 'rtu'), table['rtu']['slave_id'], '2F-140 Modbus RTU', log)
+    return PseudoTerminal(device, table['rtu']['frame_gap'], link, "the 2F-140's").start('2F-140 Modbus RTU')
 
 
 def serve_tcp(table, gripper, lock, log, address, port=None):
