@@ -304,6 +304,11 @@ FT300_RATE = 100.0  # Hz: rq_sensor's stream
 # address, on a port a user may take).
 GRIPPER_LINES = {}
 GATEWAY_PORT = 5020
+# The FT 300's serial line of each physics cell, by address.
+SENSOR_LINES = {}
+# What the FT 300 weighs at rest with nothing held (kg): what hangs below it, the 2F-140 (FT 300 manual,
+# config/robotiq_mass.yaml: 1275 g with the FT 300, less the FT 300's own 300 g).
+TOOL_SIDE_MASS = 0.975
 
 
 @pytest.fixture(scope='module')
@@ -311,10 +316,11 @@ def physics_ip(ur_type, tmp_path_factory):
     """A physics cell, on its simulated clock at real time (ur_rtde keeps the wall clock's time), its 2F-140 also
     on Modbus RTU (a serial port path) and Modbus TCP (a gateway on the cell's address)."""
     log_dir = tmp_path_factory.mktemp('physics')
-    line = str(log_dir / 'ttyRobotiq2F')
+    line, sensor_line = str(log_dir / 'ttyRobotiq2F'), str(log_dir / 'ttyRobotiqFT300')
     for address in bring_up(ur_type, log_dir, 'physics:=true', 'sim_gripper_serial_port:=' + line,
-                            'sim_gripper_gateway_port:=%d' % GATEWAY_PORT, sim_gateway=True):
-        GRIPPER_LINES[address] = line
+                            'sim_gripper_gateway_port:=%d' % GATEWAY_PORT, 'sim_ft_serial_port:=' + sensor_line,
+                            sim_gateway=True):
+        GRIPPER_LINES[address], SENSOR_LINES[address] = line, sensor_line
         yield address
 
 
@@ -525,6 +531,27 @@ def test_pymodbus_on_the_gripper_line_and_gateway_closes_on_the_block_opens_and_
         control.stopScript()
         control.disconnect()
         receive.disconnect()
+
+
+def test_pymodbus_reads_the_ft300_identity_as_rq_sensor_prints_it_and_the_tools_weight(physics_ip):
+    client = ModbusSerialClient(SENSOR_LINES[physics_ip], baudrate=19200, bytesize=8, parity='N', stopbits=1,
+                                timeout=5.0)
+    assert client.connect()
+    try:
+        def registers(address, count):
+            reply = client.read_holding_registers(address, count=count, device_id=9)
+            assert not reply.isError(), reply
+            return reply.registers
+        firmware = registers(500, 3)
+        data = b''.join(r.to_bytes(2, 'big') for r in firmware)
+        assert chr(data[0]) == 'F'  # rq_sensor takes a sensor whose firmware does not start with F for none
+        assert '%c%c%c-%d.%d.%d' % tuple(data) == 'FTS-0.0.0'  # config/sim_devices.yaml
+        assert registers(514, 1) == [2026]
+        # Force in 0.01 N, signed: at rest the sensor weighs what hangs below it (the arm holds still).
+        force = [(r - 0x10000 if r & 0x8000 else r) / 100.0 for r in registers(180, 3)]
+        assert math.sqrt(sum(f * f for f in force)) == pytest.approx(TOOL_SIDE_MASS * 9.80665, abs=0.5), force
+    finally:
+        client.close()
 
 
 def test_ur_rtde_and_the_gripper_urcap_socket_pick_up_the_block(ur_type, physics_ip):
