@@ -2,7 +2,8 @@
 """Soak: the view launch (headless) for a long time, the simulated FT 300 at 100 Hz and
 gripper register commands at 10 Hz; checks that the nodes' resident memory does not grow
 and the wrench stream has no gap. With --what arm, the simulated arm instead (bench/soak_arm.py);
-with --what physics, the cell on physics driven by the shipped examples (bench/soak_physics.py).
+with --what physics, the cell on physics driven by the shipped examples (bench/soak_physics.py), and with
+--wire its FT 300 and 2F-140 also on their serial lines, clients reconnecting every minute (bench/soak_wire.py).
 
     python3 bench/soak.py [--what devices|arm|physics] [--minutes 30 | --seconds N] [--warmup S] [--record bench/RESULTS.md]
 
@@ -108,6 +109,10 @@ def main(argv=None):
     parser.add_argument('--real-time-factor', type=float, default=1.0,
                         help='with --what physics: the cell\'s pace on its simulated clock (default 1; 0: as fast '
                              'as the machine allows)')
+    parser.add_argument('--wire', action='store_true',
+                        help='with --what physics: the FT 300 and the 2F-140 also on their serial lines, read by '
+                             'clients that reconnect every --reconnect s (bench/soak_wire.py)')
+    parser.add_argument('--reconnect', type=float, default=60.0, help='with --wire: seconds per client session')
     parser.add_argument('--what', choices=('devices', 'arm', 'physics'), default='devices',
                         help='the simulated FT 300 and gripper (default), the simulated arm (bench/soak_arm.py), '
                              'or the cell on physics (bench/soak_physics.py)')
@@ -118,7 +123,7 @@ def main(argv=None):
         return soak_arm.run(args, seconds, 'soak arm')
     if args.what == 'physics':
         import soak_physics
-        return soak_physics.run(args, seconds, 'soak physics')
+        return soak_physics.run(args, seconds, 'soak physics wire' if args.wire else 'soak physics')
 
     master = benchlib.use_new_master()
     launch = None

@@ -7,10 +7,13 @@ then the guarded touch (down onto the table until 10 N, back off, back to the
 trajectory controller). Limits: the resident memory of the arm's process
 (where the cell steps), of the FT 300's and of the gripper's grows by at
 most 5 MB each after the warm-up; every cycle succeeds and weighs the block
-within 2 % of its world-file mass.
+within 2 % of its world-file mass. With --wire (bench/soak_wire.py), the FT 300 and the 2F-140 are also
+on their serial lines, read by clients that reconnect every --reconnect s: each stream session must be the
+topic's readings frame for message, and every status read of the gripper must be answered.
 """
 import math
 import os
+import tempfile
 import time
 
 import numpy as np
@@ -44,10 +47,15 @@ def run(args, seconds, record_section):
     master = benchlib.use_new_master()
     launch = None
     problems, rss, cycles, weights, cpu, simulated = [], {}, 0, [], None, 0.0
+    wire, published, wire_rows = None, [], []
+    lines = {name: os.path.join(tempfile.gettempdir(), 'tty%s-soak-%d' % (name, os.getpid()))
+             for name in ('RobotiqFT300', 'Robotiq2F')}
     try:
         import rospy
         launch = benchlib.roslaunch('ur3_ft_gripper_description', 'ur3_ft_gripper_bringup.launch', 'sim:=true',
                                     'physics:=true', 'real_time_factor:=%g' % args.real_time_factor,
+                                    *(['sim_ft_serial_port:=' + lines['RobotiqFT300'],
+                                       'sim_gripper_serial_port:=' + lines['Robotiq2F']] if args.wire else []),
                                     log=os.environ.get('SOAK_LOG'))
         # The bring-up sets use_sim_time; this node must start on the same clock as the cell.
         import rosgraph
@@ -65,6 +73,14 @@ def run(args, seconds, record_section):
         first = block_pose(truth)
         shifts = []
         pids = {node: benchlib.node_pid(node) for node in NODES}
+        if args.wire:
+            import soak_wire
+            from geometry_msgs.msg import WrenchStamped
+            # Every reading the FT 300 publishes, in the stream's counts, to hold each session's frames against.
+            rospy.Subscriber('robotiq_ft_wrench', WrenchStamped,
+                             lambda msg: published.append((msg.header.stamp, soak_wire.counts(msg))), queue_size=None)
+            wire = soak_wire.WireClients(lines['RobotiqFT300'], lines['Robotiq2F'], args.reconnect)
+            wire.start()
         start = time.monotonic()
         warm = None
         while time.monotonic() - start < args.warmup + seconds:
@@ -98,6 +114,10 @@ def run(args, seconds, record_section):
         cpu = {n: 100.0 * (benchlib.cpu_seconds(p) - warm[1][n]) / wall for n, p in pids.items()}
         simulated = truth.truth()[0] - warm[4]
         measured_cycles = cycles - warm[2]
+        if wire is not None:
+            wire.stop()
+            wire_rows, wire_problems = wire.judge([value for _, value in sorted(published)])
+            problems += wire_problems
     finally:
         benchlib.stop(launch)
         benchlib.stop(master)
@@ -116,10 +136,12 @@ def run(args, seconds, record_section):
                     '(limit %g MB) |' % (n, rss[n][0], max(rss[n]), rss[n][-1], growth, RSS_LIMIT_MB))
     rows.append('| CPU, mean over the measurement (%% of one core): ur_hardware_interface (arm + cell, 125 Hz), '
                 'robotiq_ft_sensor, robotiq2FGripper | %.0f, %.0f, %.0f |' % tuple(cpu[n] for n in NODES))
-    rows.append('| cycles that failed | %d |' % len(problems))
+    rows += wire_rows
+    rows.append('| cycles that failed, and other findings | %d |' % len(problems))
     return benchlib.report_soak(
         args.record, record_section,
-        '## Soak of the physics cell (`bash tools/quickstart soak --what physics`)',
+        '## Soak of the physics cell%s (`bash tools/quickstart soak --what physics%s`)'
+        % ((' with its devices on the wire', ' --wire') if args.wire else ('', '')),
         'ur3_ft_gripper_bringup.launch sim:=true physics:=true real_time_factor:=%g (default world, on the cell\'s '
         'simulated clock; simulated seconds over the wall clock\'s: %.2f) on its own master, driven through the '
         'real drivers\' interfaces only; the guarded touch at %g mm/s.'
