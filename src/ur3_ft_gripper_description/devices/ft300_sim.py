@@ -445,8 +445,8 @@ def run(rospy):
         return 1
     if wire is not None:
         rospy.on_shutdown(wire[1].shutdown)
-        rospy.loginfo("ft300_sim: the FT 300 answers on its serial line at %s (%s; rq_sensor's serial_id: %s)",
-                      wire[1].link, wire[1].path, wire[1].path[len('/dev/'):])
+        rospy.loginfo("ft300_sim: the FT 300 answers on its serial line at %s (%s): for rq_sensor, the real "
+                      "bring-up's ft_serial_id:=%s", wire[1].link, wire[1].path, wire[1].path[len('/dev/'):])
     sensor_publisher = rospy.Publisher('robotiq_ft_sensor', ft_sensor, queue_size=512)
     wrench_publisher = rospy.Publisher('robotiq_ft_wrench', WrenchStamped, queue_size=512)
     log = _Log(rospy)

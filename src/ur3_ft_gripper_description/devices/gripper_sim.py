@@ -455,11 +455,14 @@ def start_modbus_faces(get_param, gripper, lock, log):
             line = robotiq_modbus.serve_rtu(table, gripper, lock, log, link=port)
             faces.append(('Modbus RTU (slave %d, %d 8N1)' % (table['rtu']['slave_id'],
                                                             table['rtu']['serial']['baudrate']),
-                          '%s (%s)' % (port, line.path), line))
+                          "%s (%s): for Robotiq's Modbus RTU node, the real bring-up's gripper_device:=%s"
+                          % (port, line.path, port), line))
         if address:
             server = robotiq_modbus.serve_tcp(table, gripper, lock, log, listen.checked_address(address),
                                               int(sim_params.read(get_param, PARAMETERS, '~modbus_tcp_port')))
-            faces.append(('Modbus TCP', '%s:%d' % server.server_address[:2], server))
+            host, tcp_port = server.server_address[:2]
+            faces.append(('Modbus TCP', "%s:%d: for Robotiq's Modbus TCP node (port 502 only), the real bring-up's "
+                          'gripper_ip:=%s' % (host, tcp_port, host), server))
     except Exception:
         for _, _, face in faces:
             face.shutdown()
