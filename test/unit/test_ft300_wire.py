@@ -14,7 +14,7 @@ import time
 import pytest
 
 from ur3_ft_gripper_description.devices.network import ft300_wire, listen
-from ur3_ft_gripper_testing.modbus_frames import LineClient, crc_framed, garbage, valid_crc
+from ur3_ft_gripper_testing.modbus_frames import SILENCE, LineClient, crc_framed, garbage, valid_crc
 
 TABLE = ft300_wire.read_table()
 IDENTITY = dict(serial_number='SIM-0001', firmware_version='FTS-0.0.0', production_year='2026')
@@ -55,7 +55,7 @@ class Line(LineClient):
         port.timeout = 2.0
         return data
 
-    def drain(self, quiet=0.2):
+    def drain(self, quiet=0.5):
         """What comes until `quiet` s pass without a byte."""
         port, data = self.client.serial, b''
         port.timeout = quiet
@@ -95,7 +95,7 @@ def test_the_force_registers_hold_the_last_reading_in_counts(line):
 
 
 def test_the_stream_carries_one_frame_per_reading_in_order_until_the_stop(line):
-    assert line.raw(START_STREAM, wait=1.0)[:8] == STARTED
+    assert line.raw(START_STREAM)[:8] == STARTED
     rng = random.Random(300)
     readings = [tuple(round(rng.uniform(-300, 300), 2) for _ in range(3)) +
                 tuple(round(rng.uniform(-30, 30), 3) for _ in range(3)) for _ in range(1000)]  # 10 s at 100 Hz
@@ -122,7 +122,7 @@ def test_the_stream_carries_one_frame_per_reading_in_order_until_the_stop(line):
 
 
 def test_a_stream_to_nobody_costs_nothing_and_stops_as_usual(line):
-    assert line.raw(START_STREAM, wait=1.0)[:8] == STARTED
+    assert line.raw(START_STREAM)[:8] == STARTED
     for _ in range(20000):  # more than the line keeps for a client: the frames nobody reads are dropped
         line.sensor.reading((0.5,) * 6)
     line.client.serial.write(STOP_BURST)
@@ -154,19 +154,19 @@ def test_a_request_the_sensor_cannot_serve_gets_its_exception_and_one_line(line,
     (b'\x09', 'cannot read'),
 ])
 def test_a_frame_for_someone_else_or_broken_gets_silence_and_one_line(line, frame, problem):
-    assert line.raw(frame) == b''
+    assert line.raw(frame, wait=SILENCE) == b''
     assert len(line.logged) == 1 and problem in line.logged[0], line.logged
     assert line.client.read_register(514) == 2026
 
 
 def test_a_stop_without_a_stream_is_nothing(line):
-    assert line.raw(STOP_BURST) == b''
+    assert line.raw(STOP_BURST, wait=SILENCE) == b''
     assert line.logged == []
 
 
 def test_seeded_garbage_never_stops_the_line(line):
     for frame in garbage(20261128, 40, 9):
-        reply = line.raw(frame, wait=0.2)
+        reply = line.raw(frame, wait=2 * SILENCE)  # a reply, or silence
         assert reply == b'' or (reply[0] == 9 and valid_crc(reply)), reply
     if line.sensor.streaming:  # a garbage write that happened to start it
         line.client.serial.write(STOP_BURST)

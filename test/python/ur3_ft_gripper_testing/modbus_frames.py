@@ -24,19 +24,34 @@ def valid_crc(frame):
     return len(frame) >= 3 and crc16(frame[:-2]) == struct.unpack('<H', frame[-2:])[0]
 
 
-def exchange(port, frame, wait=0.3):
+# How long a test watches a line to call it silent (s). A reply it waits for gets REPLY_WAIT: a busy machine
+# delays it, never the other way round.
+SILENCE, REPLY_WAIT = 0.3, 5.0
+# The pause that ends a reply (s): a device writes its reply at once.
+PAUSE = 0.05
+
+
+def exchange(port, frame, wait=REPLY_WAIT):
     """Write `frame` as it is on `port` (an open or closed pyserial port, e.g. a minimalmodbus Instrument's);
-    what comes back: a reply ends at its first pause, and silence is what the first `wait` seconds bring."""
+    what comes back: the first byte within `wait` s, then the rest until a pause of PAUSE s (b'' for
+    silence: pass SILENCE where silence is what the test expects)."""
     if not port.is_open:
         port.open()
     port.reset_input_buffer()
     port.write(frame)
-    timeout, inter_byte = port.timeout, port.inter_byte_timeout
-    port.timeout, port.inter_byte_timeout = wait, 0.05
+    timeout = port.timeout
     try:
-        return port.read(256)
+        port.timeout = wait
+        reply = port.read(1)
+        port.timeout = PAUSE
+        while reply:
+            more = port.read(256)
+            if not more:
+                break
+            reply += more
+        return reply
     finally:
-        port.timeout, port.inter_byte_timeout = timeout, inter_byte
+        port.timeout = timeout
 
 
 class LineClient(object):
@@ -53,7 +68,7 @@ class LineClient(object):
         self.client.serial.timeout = 2.0  # a reply on a busy machine; an awaited silence costs this much
         self.client.clear_buffers_before_each_transaction = True
 
-    def raw(self, frame, wait=0.3):
+    def raw(self, frame, wait=REPLY_WAIT):
         return exchange(self.client.serial, frame, wait)
 
     def close(self):
