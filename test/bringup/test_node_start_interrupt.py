@@ -29,16 +29,29 @@ def start(script, *args):
                             stderr=subprocess.STDOUT, universal_newlines=True, env=env)
 
 
+def sigint_default(pid):
+    """Whether the process leaves SIGINT to its default action: neither caught (Python's own handler, from its
+    start until the node's first line) nor ignored (inherited from a shell's background job)."""
+    with open('/proc/%d/status' % pid) as status:
+        masks = dict(line.split(':\t', 1) for line in status if line.startswith(('SigCgt', 'SigIgn')))
+    return not any(int(masks[name], 16) & (1 << (signal.SIGINT - 1)) for name in ('SigCgt', 'SigIgn'))
+
+
 def importing(process):
-    """Once rosrun has become the node's Python (it execs it), and it imports the node's modules."""
-    def python_runs():
-        with open('/proc/%d/cmdline' % process.pid, 'rb') as cmdline:
-            return b'python' in cmdline.read()
+    """Once the node's script has handed Ctrl-C to its default (its first lines) and imports its modules.
+
+    Not earlier: while Python itself starts (its site module, before any line of the script) a Ctrl-C
+    ends any Python program with a traceback, or is ignored where the shell that started it ignores it."""
     deadline = time.monotonic() + COME_UP
-    while not python_runs():
-        assert process.poll() is None and time.monotonic() < deadline, 'rosrun did not start the node\'s Python'
-        time.sleep(0.005)
-    time.sleep(0.05)  # wall s: Python is up and importing (rospy and numpy alone take longer)
+    while True:
+        try:
+            with open('/proc/%d/cmdline' % process.pid, 'rb') as cmdline:
+                if b'python' in cmdline.read() and sigint_default(process.pid):
+                    return
+        except FileNotFoundError:
+            pass
+        assert process.poll() is None and time.monotonic() < deadline, 'the node\'s script did not start'
+        time.sleep(0.001)
 
 
 def interrupted(process):
