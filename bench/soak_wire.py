@@ -103,6 +103,7 @@ class WireClients(object):
         index = {}
         for i, value in enumerate(published):
             index.setdefault(value, i)
+        on_topic = set(index)
         for n, (frames, echoed, leftover) in enumerate(self.sessions):
             if not echoed:
                 problems.append('FT 300 session %d: no echo of the stream\'s start' % n)
@@ -115,8 +116,13 @@ class WireClients(object):
             first = index.get(values[0])
             if first is None or published[first:first + len(values)] != values:
                 lost += 1
-                problems.append('FT 300 session %d: its %d frames are not the topic\'s messages one for one'
-                                % (n, len(values)))
+                # Which side lacks what: frames the topic's recording has not (this process fell behind the
+                # topic, whose publisher then dropped), or readings of the session's span the stream has not.
+                span = [index.get(v) for v in (values[0], values[-1])]
+                missing = set(published[span[0]:span[1] + 1]) - set(values) if None not in span else set()
+                problems.append('FT 300 session %d: its %d frames are not the topic\'s messages one for one (%d '
+                                'frames not on the topic, %d readings of its span not streamed)'
+                                % (n, len(values), sum(v not in on_topic for v in values), len(missing)))
             streamed += len(values)
         if self.unanswered:
             problems.append('2F-140: %d of %d status reads unanswered' % (self.unanswered,
