@@ -126,8 +126,8 @@ class SimDevicesTest(unittest.TestCase):
 
     # -- helpers -------------------------------------------------------------
 
-    def lookup(self, target, source):
-        return rostest_helpers.lookup(self.buffer, target, source)
+    def lookup(self, target, source, stamp=None):
+        return rostest_helpers.lookup(self.buffer, target, source, stamp=stamp)
 
     def move_to(self, arm):
         """Publish `arm`, wait until TF shows it; returns the sensor's orientation in base_link.
@@ -138,7 +138,8 @@ class SimDevicesTest(unittest.TestCase):
         if PHYSICS:
             self.ur_arm.move_steadily(arm)
             rospy.sleep(1.0)  # on the cell's clock: a busy machine slows it
-            return self.lookup('base_link', SENSOR)[:3, :3]
+            # TF at that moment: this node's listener may trail the cell, and the latest it has be the last pose.
+            return self.lookup('base_link', SENSOR, stamp=rospy.Time.now())[:3, :3]
         type(self).arm = list(arm)
         expected = self.model.transform('base_link', SENSOR, dict(zip(ARM, arm)))
 

@@ -32,9 +32,10 @@ def transform_matrix(msg):
     return t
 
 
-def lookup(buffer, target, source, timeout=TIMEOUT):
-    """The latest pose of `source` in `target` from tf2, as a 4x4 matrix."""
-    msg = buffer.lookup_transform(target, source, rospy.Time(0), rospy.Duration(timeout))
+def lookup(buffer, target, source, timeout=TIMEOUT, stamp=None):
+    """The pose of `source` in `target` from tf2 at `stamp` (rospy.Time; None: the latest it has), as a 4x4
+    matrix; waits up to `timeout` for TF to reach `stamp`."""
+    msg = buffer.lookup_transform(target, source, stamp or rospy.Time(0), rospy.Duration(timeout))
     return transform_matrix(msg.transform)
 
 
