@@ -115,20 +115,20 @@ def serve_tcp(table, gripper, lock, log, address, port=None):
     protocol = ModbusGripper(table, gripper, lock, 'tcp')
     query_class = framings()[1]
 
-    class Session(socketserver.BaseRequestHandler):
+    class Session(socketserver.StreamRequestHandler):
         def handle(self):
             client = '%s:%d' % self.client_address[:2]
             while True:
-                header = _receive(self.request, 7)
-                if header is None:
+                header = self.rfile.read(7)
+                if len(header) < 7:
                     return
                 length = struct.unpack('>H', header[4:6])[0]
                 if not 2 <= length <= MAX_ADU - 6:
                     log('2F-140 Modbus TCP: %s sent a header of length %d, not a Modbus frame: its connection is '
                         'closed' % (client, length))
                     return
-                body = _receive(self.request, length - 1)
-                if body is None:
+                body = self.rfile.read(length - 1)
+                if len(body) < length - 1:
                     return
                 query = query_class()
                 try:
@@ -139,18 +139,9 @@ def serve_tcp(table, gripper, lock, log, address, port=None):
                 response, problem = protocol.reply(pdu)
                 if problem is not None:
                     log('2F-140 Modbus TCP: %s: %s; exception %d replied' % (client, problem, response[1]))
-                self.request.sendall(query.build_response(response))
+                self.wfile.write(query.build_response(response))
 
     server = listen.serve('2F-140 Modbus TCP', address, table['tcp']['port'] if port is None else port, Session, log)
     threading.Thread(target=server.serve_forever, name='2F-140 Modbus TCP', daemon=True).start()
     return server
 
-
-def _receive(sock, size):
-    data = b''
-    while len(data) < size:
-        chunk = sock.recv(size - len(data))
-        if not chunk:
-            return None
-        data += chunk
-    return data
