@@ -29,7 +29,9 @@ def on_wire(tmp_path_factory):
     """The paths and values the nodes logged: {'ft': (link, pty, ft_serial_id), 'gripper': (...)}."""
     log = tmp_path_factory.mktemp('on_wire') / 'roslaunch.log'
     port = free_port()
-    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port)
+    # Python buffers a node's output in blocks when it goes to a file, not a terminal: unbuffered, each
+    # line reaches the log as the user's terminal shows it.
+    env = dict(os.environ, ROS_MASTER_URI='http://127.0.0.1:%d' % port, PYTHONUNBUFFERED='1')
     with open(str(log), 'w') as output:
         launch = subprocess.Popen(['roslaunch', '-p', str(port), 'ur3_ft_gripper_description',
                                    'view_ur3_ft_gripper.launch', 'gui:=false', 'rviz:=false', 'devices_on_wire:=true'],
