@@ -2,7 +2,7 @@
 import pytest
 
 from ur3_ft_gripper_description.devices import sim_params
-from ur3_ft_gripper_description.devices.sim_clock import SimClock, check_factor
+from ur3_ft_gripper_description.devices.sim_clock import SimClock, check_factor, wall_cycles
 
 
 class Wall(object):
@@ -81,3 +81,11 @@ def test_a_factor_other_than_one_needs_the_simulated_clock():
     with pytest.raises(sim_params.ParamError) as error:
         check_factor(False, 0.0)
     assert 'use_sim_time:=true' in str(error.value)
+
+
+@pytest.mark.parametrize('periods', [0.0, 0.3, 1.0, 1.49, 1.51, 2.0, 3.7, 9.9, 10.0, 55.0])
+def test_on_the_wall_clock_a_late_cycle_is_made_up_in_periods_of_the_robot(periods):
+    period, longest = 0.008, 0.08
+    cycles = wall_cycles(periods * period, period, longest)
+    assert sum(cycles) == pytest.approx(min(periods * period, longest))  # the time the host let pass, capped
+    assert all(c == period for c in cycles[:-1]) and 0.0 <= cycles[-1] <= 1.5 * period

@@ -14,7 +14,7 @@ import rospkg
 import yaml
 from transforms3d.quaternions import mat2quat
 
-from ur3_ft_gripper_description.devices import sim_params
+from ur3_ft_gripper_description.devices import sim_clock, sim_params
 from ur3_ft_gripper_description.devices.ur_arm import core as arm_core
 from ur3_ft_gripper_description.devices.ur_arm import controller_manager as cm
 from ur3_ft_gripper_description.devices.ur_arm import joints as jm
@@ -265,6 +265,26 @@ def test_a_goal_succeeds_and_a_new_one_preempts(arm):
     assert finished(arm) == [(controller, 'c', 'preempted', 'SUCCESSFUL')]
     stopped = run(arm, 1.0).position  # stop_trajectory_duration 0.5 s, and servoj's settling
     assert np.allclose(run(arm, 0.5).position, stopped, atol=1e-9)
+
+
+def test_a_stall_of_the_host_on_the_wall_clock_is_not_the_arm_falling_behind(configured_model):
+    # A ur3 (8 ms cycles) on a trajectory at its velocity limit: 3 rad in 1 s. The host stalls for ten
+    # periods in the middle of it; the node makes the time up in the robot's own cycles.
+    def goal_through_a_stall(cycles):
+        arm = make_core(configured_model, 'ur3')
+        controller = 'scaled_pos_joint_traj_controller'
+        assert arm.trajectory_goal(controller, 'far', JOINTS, [Point(1.0, [3.0] + HOME[1:])]).status == 'accepted'
+        run(arm, 0.4, dt=0.008)
+        for dt in cycles:
+            arm.step(dt)
+        run_until(arm, lambda: arm.finished, 3.0, dt=0.008)
+        return finished(arm)
+
+    made_up = goal_through_a_stall(sim_clock.wall_cycles(0.08, 0.008, 0.08))
+    assert made_up == [('scaled_pos_joint_traj_controller', 'far', 'succeeded', 'SUCCESSFUL')]
+    # One 80 ms cycle instead: the trajectory runs 80 ms ahead of joints moving at 3 rad/s.
+    at_once = goal_through_a_stall([0.08])
+    assert at_once == [('scaled_pos_joint_traj_controller', 'far', 'aborted', 'PATH_TOLERANCE_VIOLATED')]
 
 
 def test_a_goal_naming_an_extra_unknown_joint_is_invalid_joints(arm):

@@ -94,3 +94,20 @@ def check_factor(use_sim_time, factor):
         raise sim_params.ParamError('~real_time_factor=%g needs use_sim_time:=true: on the wall clock the cell '
                                     'runs at real time (1)' % factor)
     return factor
+
+
+def wall_cycles(elapsed, period, longest):
+    """The control cycles (s each) that run `elapsed` wall-clock seconds, at most `longest`, without use_sim_time.
+
+    The robot's controller never runs a cycle longer than its period, whatever the host does. One long
+    cycle after a stall of this host would let a trajectory run ahead of the joints by its whole length,
+    and a path tolerance would read the stall as the arm falling behind. So a late cycle is made up in
+    periods, and only the last one takes the remainder (under one and a half periods).
+    """
+    late = min(max(elapsed, 0.0), longest)
+    cycles = []
+    while late > 1.5 * period:
+        cycles.append(period)
+        late -= period
+    cycles.append(late)
+    return cycles

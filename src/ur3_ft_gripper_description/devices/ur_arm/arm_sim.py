@@ -456,13 +456,18 @@ def main():
             rospy.on_shutdown(sim.network.shutdown)
         if sim.clock is not None:
             return node_loop.run_as_clock(rospy, sim.clock, sim.step)
-        # The wall clock: each cycle as long as the time since the last, at most ten periods.
-        longest_step = 10.0 / sim.loop_hz
+        # The wall clock: the time since the last cycle, at most ten periods, in the robot's own cycles.
+        period = 1.0 / sim.loop_hz
         clock = {'last': rospy.get_time()}
 
         def step():
             now = rospy.get_time()
-            sim.step(min(max(now - clock['last'], 0.0), longest_step))
+            cycles = sim_clock.wall_cycles(now - clock['last'], period, 10.0 * period)
+            behind = sum(cycles)
+            for dt in cycles[:-1]:
+                behind -= dt
+                sim.step(dt, rospy.Time.from_sec(now - behind))
+            sim.step(cycles[-1])
             clock['last'] = now
 
         def restart_clock():
