@@ -462,12 +462,15 @@ def main():
 
         def step():
             now = rospy.get_time()
-            cycles = sim_clock.wall_cycles(now - clock['last'], period, 10.0 * period)
-            behind = sum(cycles)
-            for dt in cycles[:-1]:
-                behind -= dt
-                sim.step(dt, rospy.Time.from_sec(now - behind))
-            sim.step(cycles[-1])
+            late = now - clock['last']
+            if late > 1.5 * period:
+                cycles = sim_clock.wall_cycles(late, period, 10.0 * period)
+                behind = sum(cycles)
+                for dt in cycles[:-1]:
+                    behind -= dt
+                    sim.step(dt, rospy.Time.from_sec(now - behind))
+                late = cycles[-1]
+            sim.step(max(late, 0.0))
             clock['last'] = now
 
         def restart_clock():
