@@ -2,8 +2,9 @@
 
 - The FT 300's serial line: a session every `every` s (wall clock), as rq_sensor runs one: open the port,
   start the stream (0x0200 to register 410), read, stop it with 0xFF bytes, read until the line is quiet,
-  close. Each session's frames must be valid and be the topic's messages, one for one and in order: a
-  lost, repeated or changed frame shows as a mismatch.
+  close. Each session's frames must be valid and be the topic's messages, one for one and in order, each
+  plus the zero rq_sensor's driver held then (the device streams its own readings; the examples zero the
+  sensor every cycle): a lost, repeated or changed frame shows as a mismatch.
 - The 2F-140's serial line: a Modbus RTU client reading the status at 10 Hz as Robotiq's node does,
   reconnecting every `every` s; every read must be answered.
 """
@@ -21,6 +22,9 @@ STOP_STREAM = b'\xff' * 50
 READ_STATUS = crc_framed(bytes.fromhex('09 03 07 D0 00 03'))
 STATUS_REPLY = 11  # slave, function, byte count, three registers, CRC
 FRAME = 16
+# The examples zero the sensor at most once in this many readings (half a second of the cell's time): a
+# stretch of frames with one zero shorter than this, inside a session, is a frame that is not the topic's.
+LEAST_BETWEEN_ZEROS = 50
 
 
 def counts(msg):
@@ -100,10 +104,11 @@ class WireClients(object):
         """Rows for the report and problems, against `published`: the topic's messages in counts, in order of
         their stamps."""
         problems, streamed, lost = [], 0, 0
+        # Frame k is message start + k plus the driver's zero, which changes only at a SET_ZERO: the steps
+        # between consecutive frames are the steps between consecutive messages.
         index = {}
-        for i, value in enumerate(published):
-            index.setdefault(value, i)
-        on_topic = set(index)
+        for i in range(len(published) - 1):
+            index.setdefault(_step(published[i], published[i + 1]), []).append(i)
         for n, (frames, echoed, leftover) in enumerate(self.sessions):
             if not echoed:
                 problems.append('FT 300 session %d: no echo of the stream\'s start' % n)
@@ -113,16 +118,13 @@ class WireClients(object):
                 problems.append('FT 300 session %d: no frame' % n)
                 continue
             values = [v for v, _ in frames]
-            first = index.get(values[0])
-            if first is None or published[first:first + len(values)] != values:
+            runs = _zero_stretches(values, published, index)
+            if runs is None or not _one_for_one(runs):
                 lost += 1
-                # Which side lacks what: frames the topic's recording has not (this process fell behind the
-                # topic, whose publisher then dropped), or readings of the session's span the stream has not.
-                span = [index.get(v) for v in (values[0], values[-1])]
-                missing = set(published[span[0]:span[1] + 1]) - set(values) if None not in span else set()
-                problems.append('FT 300 session %d: its %d frames are not the topic\'s messages one for one (%d '
-                                'frames not on the topic, %d readings of its span not streamed)'
-                                % (n, len(values), sum(v not in on_topic for v in values), len(missing)))
+                problems.append('FT 300 session %d: its %d frames are not the topic\'s messages one for one, '
+                                'each plus the zero of its moment (%s)' % (
+                                    n, len(values), 'no stretch of them found on the topic' if runs is None else
+                                    'stretches of one zero: %s' % runs[:20]))
             streamed += len(values)
         if self.unanswered:
             problems.append('2F-140: %d of %d status reads unanswered' % (self.unanswered,
@@ -132,3 +134,36 @@ class WireClients(object):
                 '| 2F-140 Modbus RTU client (status at 10 Hz, reconnecting every %g s): sessions, replies, '
                 'unanswered | %d, %d, %d |' % (self.every, self.gripper_sessions, self.replies, self.unanswered)]
         return rows, problems
+
+
+def _step(a, b):
+    return tuple(y - x for x, y in zip(a, b))
+
+
+def _one_for_one(runs):
+    return all(run >= LEAST_BETWEEN_ZEROS for run in runs[1:-1])
+
+
+def _zero_stretches(values, published, index):
+    """The lengths of the stretches over which frame k minus message start + k is one zero, where the first
+    step between frames found among the messages' steps places the frames (of its places, the first that
+    makes them one for one); None if no step is found."""
+    k = next((k for k in range(len(values) - 1) if _step(values[k], values[k + 1]) in index), None)
+    if k is None:
+        return None
+    runs = None
+    for place in index[_step(values[k], values[k + 1])]:
+        start = place - k
+        if start < 0 or start + len(values) > len(published):
+            continue
+        runs, zero = [], None
+        for j, value in enumerate(values):
+            this = _step(published[start + j], value)
+            if this == zero:
+                runs[-1] += 1
+            else:
+                runs.append(1)
+                zero = this
+        if _one_for_one(runs):
+            break
+    return runs

@@ -77,6 +77,23 @@ class PhysicsCellTest(unittest.TestCase):
     def object_position(self, name):
         return np.array(self.truth()['objects'][name][0])
 
+    # -- the sensor before it is zeroed: first, on a sensor nothing has zeroed yet ------------
+
+    def test_0_the_example_without_its_set_zero_weighs_wrong(self):
+        # A planted fault: pick_and_weigh.py without its SET_ZERO. The FT 300 reads its unit's offset until it
+        # is zeroed, as a real one does: the weight comes out far from the world file's.
+        solid = self.world.by_name('block')
+        width, top = width_and_top(solid)
+        self.cell.sensor.zero = lambda: None
+        try:
+            self.cell.pick(solid.position[0], solid.position[1], top, 0.0)
+            mass, _ = self.cell.weigh()
+            self.cell.put_down()
+        finally:
+            del self.cell.sensor.zero
+        say('weighed without zeroing: %.3f kg (world file: %g kg)' % (mass, solid.mass))
+        self.assertGreater(abs(mass - solid.mass), 10 * WEIGHT_TOLERANCE * solid.mass)
+
     # -- the grasp matrix -----------------------------------------------------------
 
     def test_1_closing_on_nothing_and_opening_end_at_the_request(self):

@@ -53,10 +53,19 @@ if PHYSICS:
 OTHER = [0.0, -math.pi / 2, math.pi / 2, -math.pi / 2, -math.pi / 2 + 0.6, 0.4] if PHYSICS else [0.0] * 6
 
 
+# The tests that do not zero the sensor read the unit's offset beside the load.
+UNIT_FORCE, UNIT_TORQUE = np.split(rostest_helpers.FT300_UNIT_OFFSET, 2)
+
+
 def expected_wrench(rotation, mass, com):
     """Weight of `mass` at `com` (sensor frame) on a sensor with orientation `rotation` in a z-up frame."""
     force = mass * G * rotation.T.dot([0.0, 0.0, -1.0])
     return force, np.cross(com, force)
+
+
+def unzeroed(force, torque):
+    """A wrench as a sensor never zeroed reads it: with the unit's offset."""
+    return force + UNIT_FORCE, torque + UNIT_TORQUE
 
 
 def wrench_arrays(msg):
@@ -176,15 +185,17 @@ class SimDevicesTest(unittest.TestCase):
         rotation = self.move_to(TOOL_DOWN)
         self.assertAlmostEqual(rotation[2, 2], -1.0, places=6, msg='TOOL_DOWN must point the sensor down')
         force, torque = self.reading(self.wrench)
-        np.testing.assert_allclose(force, [0.0, 0.0, self.gripper_mass * G], atol=FORCE_ATOL)
-        np.testing.assert_allclose(torque, expected_wrench(rotation, self.gripper_mass, self.gripper_com)[1],
-                                   atol=TORQUE_ATOL)
+        expected_force, expected_torque = unzeroed(np.array([0.0, 0.0, self.gripper_mass * G]),
+                                                   expected_wrench(rotation, self.gripper_mass, self.gripper_com)[1])
+        np.testing.assert_allclose(force, expected_force, atol=FORCE_ATOL)
+        np.testing.assert_allclose(torque, expected_torque, atol=TORQUE_ATOL)
 
     def test_wrench_follows_the_pose_in_tf(self):
         rng = np.random.default_rng(7)
         for arm in [ZERO] + [list(rng.uniform(-math.pi, math.pi, 6)) for _ in range(4)]:
             rotation = self.move_to(arm)
-            expected_force, expected_torque = expected_wrench(rotation, self.gripper_mass, self.gripper_com)
+            expected_force, expected_torque = unzeroed(*expected_wrench(rotation, self.gripper_mass,
+                                                                        self.gripper_com))
             # The sensor's node sees the new pose through its own TF listener, later than this node when
             # the machine is busy (past the tolerance once, in a fresh root at load 12): the readings of the next
             # few seconds, until one shows it. A wrong gravity model never does.
@@ -200,9 +211,9 @@ class SimDevicesTest(unittest.TestCase):
     def test_held_object_adds_its_weight_and_lever(self):
         self.move_to(TOOL_DOWN)
         force, _ = self.reading(self.loaded)
-        self.assertAlmostEqual(force[2], (self.gripper_mass + OBJECT_MASS) * G, delta=FORCE_ATOL)
+        self.assertAlmostEqual(force[2] - UNIT_FORCE[2], (self.gripper_mass + OBJECT_MASS) * G, delta=FORCE_ATOL)
         self.move_to(ZERO)  # horizontal: the weight acts on the combined lever arm
-        _, torque = self.reading(self.loaded)
+        torque = self.reading(self.loaded)[1] - UNIT_TORQUE
         lever = self.gripper_mass * self.gripper_com[2] + OBJECT_MASS * OBJECT_COM[2]
         self.assertAlmostEqual(np.linalg.norm(torque), lever * G, delta=2 * TORQUE_ATOL)
 

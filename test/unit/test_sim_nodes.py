@@ -88,6 +88,8 @@ def test_ft300_without_gripper_carries_only_the_held_object():
     (dict(gravity_frame=''), '~gravity_frame'),
     (dict(devices_file='/nonexistent/sim_devices.yaml'), '~devices_file'),
     (dict(max_pose_age=0), '~max_pose_age'),
+    (dict(unit_offset=[1, 2, 3, 4, 5]), '~unit_offset'),
+    (dict(unit_offset='0 0 0 0 0 inf'), '~unit_offset'),
 ])
 def test_ft300_bad_parameter_is_one_line_naming_it(values, named):
     with pytest.raises(sim_params.ParamError) as error:
@@ -119,8 +121,32 @@ def on_grid(values):
         assert v == float(np.float32(v))
 
 
-def test_reading_is_the_gripper_weight_in_the_devices_resolution():
+# The unit's offset of config/sim_devices.yaml, a user's FT 300 at rest.
+USERS_UNIT = wrench_model.load_sensor_spec(sim_params.default_devices_file()).unit_offset
+
+
+def test_a_sensor_never_zeroed_reads_its_units_offset_beside_the_weight():
+    assert np.linalg.norm(USERS_UNIT[:3]) > 20.0  # tens of newtons, as real units read before zeroing
     sensor = ft300_sim.SensorModel(noise_free())
+    reading = np.array(sensor.read_gravity(*DOWN))
+    assert reading[:3] == pytest.approx(np.add(USERS_UNIT[:3], (0, 0, 9.56)), abs=1e-5)
+    assert reading[3:] == pytest.approx(USERS_UNIT[3:], abs=0.0021)
+    on_grid(reading)
+    # The device's own reading, which its registers and stream carry, is the same until SET_ZERO.
+    assert sensor.device_reading() == tuple(reading)
+
+
+def test_set_zero_is_the_drivers_the_device_goes_on_sending_its_offset():
+    sensor = ft300_sim.SensorModel(noise_free())
+    sensor.read_gravity(*DOWN)
+    sensor.request_zero()
+    assert sensor.read_gravity(*UP) == pytest.approx((0, 0, -2 * 9.5615, 0, 0, 0), abs=0.006)
+    device = np.array(sensor.device_reading())
+    assert device[:3] == pytest.approx(np.add(USERS_UNIT[:3], (0, 0, -9.5615)), abs=0.006)
+
+
+def test_reading_is_the_gripper_weight_in_the_devices_resolution():
+    sensor = ft300_sim.SensorModel(noise_free(unit_offset=[0] * 6))
     reading = sensor.read_gravity(*DOWN)
     assert reading[:3] == pytest.approx((0, 0, 9.56), abs=1e-6)  # 0.975 kg * g = 9.5615 N
     # The meshes put the centre of mass within 0.2 mm of the axis: at most a count or two of torque.
@@ -181,7 +207,8 @@ def test_a_zero_requested_ahead_of_the_readings_sent_takes_the_one_at_the_reques
     sensor.request_zero(index=5)
     read = {index: sensor.read(wrench_model.gravity_wrench(*poses[index], settings.load.mass, settings.load.com),
                                index) for index in sorted(poses)}
-    assert read[3][2] == read[4][2] == pytest.approx(9.5615, abs=0.006)  # the gripper's weight, unzeroed
+    unzeroed = 9.5615 + USERS_UNIT[2]  # the gripper's weight and the unit's offset
+    assert read[3][2] == read[4][2] == pytest.approx(unzeroed, abs=0.006)
     assert read[5][2] == pytest.approx(-2 * 9.5615, abs=0.006)  # relative to reading 4, the tool down
 
 

@@ -11,7 +11,9 @@ rq_sensor's answers (``accessor_reply``).
 
 The reading is what the real sensor shows when nothing touches the tool:
 the weight of the gripper (and of a held object) for the current pose,
-taken from TF, plus white noise, minus the zero that SET_ZERO takes. The
+taken from TF, plus the unit's own offset (~unit_offset: a real unit's by
+default, so code that forgets SET_ZERO reads nonsense, as on the robot), plus
+white noise, minus the zero that SET_ZERO takes. The
 gripper's mass and centre of mass are the model's own: the inertials of
 every link below ``~frame_id`` in ``robot_description`` (fingers open;
 looked for up the namespaces, like ``rospy.search_param``).
@@ -36,7 +38,8 @@ simulated second, each stamped with its time, however late the node runs.
 With ``~modbus_rtu_port`` (a path) the sensor is also on its serial line, as
 behind its USB adapter, on a pseudo-terminal linked at that path
 (network/ft300_wire.py): Modbus RTU and the data stream, which rq_sensor and
-Modbus clients read; the stream carries each reading this node publishes.
+Modbus clients read. They carry the device's own readings, one for each this
+node publishes: rq_sensor zeroes in the driver, so they keep the unit's offset.
 
 Both sources, the gravity model and the cell, sit behind one seam
 (GravitySource, CellSource: ``readings(now)``) and one publishing loop.
@@ -64,6 +67,10 @@ PARAMETERS = (
                      'Standard deviation of the force noise (N); 0: none', sim_params.number(minimum=0.0)),
     sim_params.Param('~noise_torque', sim_params.StartupDefault('the sensor\'s `noise_torque` in ~devices_file'),
                      'Standard deviation of the torque noise (Nm); 0: none', sim_params.number(minimum=0.0)),
+    sim_params.Param('~unit_offset', sim_params.StartupDefault('the sensor\'s `unit_offset` in ~devices_file'),
+                     'What the unit reads before SET_ZERO beside its load (fx fy fz N, tx ty tz N m), a list or a '
+                     'string like "0 0 0 0 0 0": on the serial line always, on the topics until SET_ZERO',
+                     sim_params.wrench),
     sim_params.Param('~payload_mass', 0.0, 'Mass of a held object (kg), added to what the model hangs below the '
                      'sensor; not with ~physics, which weighs what the gripper holds', sim_params.number(minimum=0.0)),
     sim_params.Param('~payload_com', [0.0, 0.0, 0.0], 'Centre of mass of the held object (m, x y z in the sensor '
@@ -88,6 +95,7 @@ class FT300Settings(object):
     rate: float
     noise_force: float
     noise_torque: float
+    unit_offset: tuple
     load: wrench_model.Load
     identity: dict
     max_pose_age: float
@@ -109,6 +117,7 @@ class FT300Settings(object):
             rate=param('~rate', default=sensor.rate),
             noise_force=param('~noise_force', default=sensor.noise_force),
             noise_torque=param('~noise_torque', default=sensor.noise_torque),
+            unit_offset=tuple(param('~unit_offset', default=sensor.unit_offset)),
             load=below_sensor.with_object(object_mass, object_com),
             identity=sensor.identity,
             max_pose_age=param('~max_pose_age'))
@@ -155,16 +164,29 @@ FORCE_RESOLUTION, TORQUE_RESOLUTION = 0.01, 0.001
 COUNT_MIN, COUNT_MAX = -32768, 32767
 
 
-def as_device_sends(values):
-    """(fx, fy, fz, tx, ty, tz) rounded to the stream's counts, as the float32 rq_sensor publishes."""
-    counts = [min(max(round(v / r), COUNT_MIN), COUNT_MAX) for v, r in
-              zip(values, (FORCE_RESOLUTION,) * 3 + (TORQUE_RESOLUTION,) * 3)]
+def device_counts(values):
+    """(fx, fy, fz, tx, ty, tz) in the stream's 16-bit counts."""
+    return [min(max(round(v / r), COUNT_MIN), COUNT_MAX) for v, r in
+            zip(values, (FORCE_RESOLUTION,) * 3 + (TORQUE_RESOLUTION,) * 3)]
+
+
+def from_counts(counts):
+    """Counts as the float32 values rq_sensor publishes."""
     scaled = [c / 100.0 for c in counts[:3]] + [c / 1000.0 for c in counts[3:]]
     return tuple(np.array(scaled, dtype=np.float32).tolist())
 
 
+def as_device_sends(values):
+    """(fx, fy, fz, tx, ty, tz) rounded to the stream's counts, as the float32 rq_sensor publishes."""
+    return from_counts(device_counts(values))
+
+
 class SensorModel(object):
-    """Reading = true wrench + noise - zero offset, in the stream's resolution (no ROS).
+    """The device's reading = true wrench + the unit's offset + noise; the driver's = that - the zero (no ROS).
+
+    Both in the stream's resolution. rq_sensor zeroes in the driver: SET_ZERO takes the device's reading
+    of the moment as the zero, and the device itself (its registers, its stream) goes on sending its own
+    reading, offset included.
 
     The true wrench comes from one of two sources: the gravity of the modelled
     load for the sensor's orientation (read_quaternion, read_gravity), or a
@@ -183,7 +205,9 @@ class SensorModel(object):
         self._sigma = np.array([settings.noise_force] * 3 + [settings.noise_torque] * 3)
         self._noise = []  # pre-drawn noise rows: one numpy call per NOISE_BLOCK readings
         self._indexed_block, self._indexed_noise = None, None  # the same, by reading number
-        self._offset = (0.0,) * 6
+        self._unit_offset = tuple(float(v) for v in settings.unit_offset)
+        self._zero = [0] * 6  # the driver's zero, in counts: a reading of the device's
+        self._device = [0] * 6  # the device's own last reading (counts), before the driver's zero
 
     def read_quaternion(self, x, y, z, w):
         """The reading for the sensor's orientation as a unit quaternion (a tf2 lookup's)."""
@@ -210,9 +234,10 @@ class SensorModel(object):
             # As rq_sensor_com does: the reading before the request becomes the zero.
             # Its noise-free value is taken, what the noise averages out to.
             self._zero_requested = False
-            self._offset = self.last_true if self.last_true is not None else true
+            held = self.last_true if self.last_true is not None else true
+            self._zero = device_counts([v + o for v, o in zip(held, self._unit_offset)])
         self.last_true = true
-        values = true
+        values = [v + o for v, o in zip(true, self._unit_offset)]
         if self._noisy:
             if index is None:
                 if not self._noise:
@@ -220,8 +245,14 @@ class SensorModel(object):
                 row = self._noise.pop()
             else:
                 row = self._noise_at(int(index))
-            values = [v + n for v, n in zip(true, row)]
-        return as_device_sends([v - o for v, o in zip(values, self._offset)])
+            values = [v + n for v, n in zip(values, row)]
+        # As rq_sensor subtracts its zero from each reading: both are the device's, in its resolution.
+        self._device = device_counts(values)
+        return from_counts([d - z for d, z in zip(self._device, self._zero)])
+
+    def device_reading(self):
+        """The device's own last reading, as its registers and its stream carry it: no zero, the unit's offset."""
+        return from_counts(self._device)
 
     def _noise_at(self, index):
         """The noise row of reading `index`: block index // NOISE_BLOCK drawn from a generator seeded by it."""
@@ -482,7 +513,7 @@ def run(rospy):
             torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
             wrench_publisher.publish(message)
             if wire is not None:
-                wire[0].reading((fx, fy, fz, tx, ty, tz))
+                wire[0].reading(sensor.device_reading())
 
     if sim_time:
         # One reading per period of simulated time, stamped with it, however late this node runs.

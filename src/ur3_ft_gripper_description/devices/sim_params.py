@@ -106,18 +106,28 @@ def unset_or(check):
     return lambda name, value: None if value is None else check(name, value)
 
 
-def vector3(name, value):
-    """Three finite floats, given as a list or as a string like '0 0 0.1' or '[0, 0, 0.1]'."""
+def _finite_numbers(name, value, what):
+    """len(what) finite floats, given as a list or as a string like '0 0 0.1' or '[0, 0, 0.1]'."""
     items = value
     if isinstance(value, str):
         items = value.replace('[', ' ').replace(']', ' ').replace(',', ' ').split()
     try:
         result = [float(v) for v in items]
     except (TypeError, ValueError):
-        raise ParamError('%s=%r must be three numbers (x, y, z)' % (name, value))
-    if len(result) != 3 or not all(math.isfinite(v) for v in result):
-        raise ParamError('%s=%r must be three finite numbers (x, y, z)' % (name, value))
+        result = None
+    if result is None or len(result) != len(what) or not all(math.isfinite(v) for v in result):
+        raise ParamError('%s=%r must be %d finite numbers (%s)' % (name, value, len(what), ', '.join(what)))
     return result
+
+
+def vector3(name, value):
+    """Three finite floats, given as a list or as a string like '0 0 0.1' or '[0, 0, 0.1]'."""
+    return _finite_numbers(name, value, ('x', 'y', 'z'))
+
+
+def wrench(name, value):
+    """Six finite floats (fx fy fz in N, tx ty tz in N m), as a list or a string like vector3's."""
+    return _finite_numbers(name, value, ('fx', 'fy', 'fz', 'tx', 'ty', 'tz'))
 
 
 def frame(name, value):

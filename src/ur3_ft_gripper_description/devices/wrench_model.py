@@ -51,11 +51,12 @@ class Load(object):
 
 @dataclasses.dataclass
 class SensorSpec(object):
-    """The FT 300's own figures: sensor frame, noise, stream rate, and the identity it reports."""
+    """The FT 300's own figures: sensor frame, noise, the unit's offset, stream rate, and the identity it reports."""
 
     frame_id: str = 'robotiq_ft_frame_id'
     noise_force: float = 0.0
     noise_torque: float = 0.0
+    unit_offset: tuple = (0.0,) * 6
     rate: float = 100.0
     identity: dict = dataclasses.field(default_factory=dict)
 
@@ -70,6 +71,7 @@ def load_sensor_spec(path):
     return SensorSpec(frame_id=sensor.get('frame_id', 'robotiq_ft_frame_id'),
                       noise_force=float(sensor.get('noise_force', 0.0)),
                       noise_torque=float(sensor.get('noise_torque', 0.0)),
+                      unit_offset=tuple(float(v) for v in sensor.get('unit_offset', (0.0,) * 6)),
                       rate=float(sensor.get('rate', 100.0)),
                       identity={key: str(sensor.get(key, 'UNKNOWN')) for key in
                                 ('serial_number', 'firmware_version', 'production_year')})

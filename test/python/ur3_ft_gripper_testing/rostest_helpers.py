@@ -17,10 +17,13 @@ import numpy as np
 import rospy
 from transforms3d.quaternions import quat2mat
 
-from ur3_ft_gripper_description.devices import gripper_model
+from ur3_ft_gripper_description.devices import gripper_model, sim_params, wrench_model
 from ur3_ft_gripper_description.model.names import GRIPPER_BASE, PADS
 
 TIMEOUT = 30.0
+# What the simulated FT 300 reads before SET_ZERO beside its load (fx fy fz N, tx ty tz N m): the unit's
+# offset of config/sim_devices.yaml, for tests that read a sensor they have not zeroed.
+FT300_UNIT_OFFSET = np.array(wrench_model.load_sensor_spec(sim_params.default_devices_file()).unit_offset)
 
 
 def transform_matrix(msg):

@@ -6,9 +6,10 @@ the start value to the stream register switches it to the data stream: a 16-byte
 the sensor's 100 Hz, until the client sends a run of 0xFF bytes; then it answers Modbus again. This is
 how rq_sensor, Robotiq's ROS driver, talks to it. The framing (CRC, slave id) is modbus_tk's.
 
-The readings are the node's own (ft300_sim), handed over one by one as it publishes them (`reading`):
-the stream carries what the ROS face publishes, frame for message, in the same order, and the force
-registers read the last of them.
+The readings are the device's own (ft300_sim's SensorModel), handed over one by one as the node
+publishes its own (`reading`): the stream carries one frame for each message of the ROS face, in the same
+order, and the force registers read the last of them. They are the device's, before the zero that
+rq_sensor keeps in the driver, so the unit's offset stays on them.
 
 Bad input, as the sensor meets it: a frame with a wrong CRC or for another slave gets no reply; a
 request it cannot serve gets the protocol's exception reply; each costs one log line, and the line goes
