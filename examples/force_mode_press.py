@@ -69,7 +69,7 @@ class ForceModePress(object):
             samples.append(sample())
             self.rospy.sleep(0.02)
         ft300 = self.sensor.mean_over(start, start + MEASURE)
-        robot = clients.mean_wrench(self.script.wrench_since(start, start + MEASURE))
+        robot = self.script.wrench.mean_over(start, start + MEASURE)
         clients.wait_until(self.rospy, lambda: self.script.program_running is False and
                            self.rospy.get_time() > start + seconds + 3.0, 'the end of the program', 30.0)
         self.script.resume()

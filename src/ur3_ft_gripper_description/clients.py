@@ -263,19 +263,19 @@ class Gripper2F(object):
                                 'the fingers stopped (gOBJ 1, 2 or 3) for rPR %d' % position, timeout)
 
 
-class FT300(object):
-    """The Robotiq FT 300 through rq_sensor's interface: its wrench stream and SET_ZERO."""
+class WrenchRecord(object):
+    """A WrenchStamped topic's readings by their stamps: (stamp s, (fx, fy, fz, tx, ty, tz)), the latest 3000."""
 
-    def __init__(self, rospy, timeout=30.0):
+    # A cell on the simulated clock runs faster than real time: a client the machine starves for a moment
+    # finds what came meanwhile in its queue.
+    QUEUE = 1000
+
+    def __init__(self, rospy, topic):
         from geometry_msgs.msg import WrenchStamped
-        from robotiq_ft_sensor.srv import sensor_accessor
-        self.rospy = rospy
-        self.readings = collections.deque(maxlen=3000)  # (stamp, (fx, fy, fz, tx, ty, tz))
+        self.rospy, self.topic = rospy, topic
+        self.readings = collections.deque(maxlen=3000)
         self._lock = threading.Lock()
-        rospy.Subscriber('robotiq_ft_wrench', WrenchStamped, self._on_wrench, queue_size=100)
-        rospy.wait_for_service('robotiq_ft_sensor_acc', timeout)
-        self.accessor = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
-        wait_until_up(rospy, lambda: self.readings, 'robotiq_ft_wrench', timeout)
+        rospy.Subscriber(topic, WrenchStamped, self._on_wrench, queue_size=self.QUEUE)
 
     def _on_wrench(self, msg):
         f, t = msg.wrench.force, msg.wrench.torque
@@ -291,6 +291,43 @@ class FT300(object):
         with self._lock:
             return [w for t, w in self.readings if start <= t <= end]
 
+    def mean_over(self, start, end):
+        """The mean wrench stamped from `start` to `end` (s, ROS time), once a later reading arrived."""
+        with self._lock:
+            stamp = self.readings[-1][0] if self.readings else start
+        if abs(stamp - start) > CLOCKS_APART:
+            raise CellError('%s is stamped %.0f s away from this node\'s ROS time: run this node with the same '
+                            'use_sim_time as the cell' % (self.topic, stamp - start))
+        wait_until(self.rospy, lambda: self.readings and self.readings[-1][0] >= end,
+                   '%s for %g s' % (self.topic, end - start), max(0.0, end - self.rospy.get_time()) + 10.0)
+        readings = self.since(start, end)
+        if not readings:
+            raise CellError('no %s in %g s' % (self.topic, end - start))
+        return mean_wrench(readings)
+
+
+class FT300(object):
+    """The Robotiq FT 300 through rq_sensor's interface: its wrench stream and SET_ZERO."""
+
+    def __init__(self, rospy, timeout=30.0):
+        from robotiq_ft_sensor.srv import sensor_accessor
+        self.rospy = rospy
+        self.record = WrenchRecord(rospy, 'robotiq_ft_wrench')
+        rospy.wait_for_service('robotiq_ft_sensor_acc', timeout)
+        self.accessor = rospy.ServiceProxy('robotiq_ft_sensor_acc', sensor_accessor)
+        wait_until_up(rospy, lambda: self.record.readings, 'robotiq_ft_wrench', timeout)
+
+    @property
+    def readings(self):
+        return self.record.readings
+
+    def latest(self):
+        return self.record.latest()
+
+    def since(self, start, end=float('inf')):
+        """The readings stamped from `start` (s, ROS time) on, up to `end`."""
+        return self.record.since(start, end)
+
     def zero(self):
         """SET_ZERO (command_id 8): later readings are relative to the current one."""
         reply = self.accessor(command_id=8, command='')
@@ -305,17 +342,7 @@ class FT300(object):
 
     def mean_over(self, start, end):
         """The mean wrench stamped from `start` to `end` (s, ROS time), once a later reading arrived."""
-        with self._lock:
-            stamp = self.readings[-1][0] if self.readings else start
-        if abs(stamp - start) > CLOCKS_APART:
-            raise CellError('robotiq_ft_wrench is stamped %.0f s away from this node\'s ROS time: run this node '
-                            'with the same use_sim_time as the cell' % (stamp - start))
-        wait_until(self.rospy, lambda: self.readings and self.readings[-1][0] >= end,
-                   'robotiq_ft_wrench for %g s' % (end - start), max(0.0, end - self.rospy.get_time()) + 10.0)
-        readings = self.since(start, end)
-        if not readings:
-            raise CellError('no robotiq_ft_wrench in %g s' % (end - start))
-        return mean_wrench(readings)
+        return self.record.mean_over(start, end)
 
 
 class UrScript(object):
@@ -327,24 +354,16 @@ class UrScript(object):
     """
 
     def __init__(self, rospy, timeout=30.0, headless=False):
-        from geometry_msgs.msg import WrenchStamped
         from std_msgs.msg import Bool, String
         self.rospy, self.headless, self.timeout = rospy, headless, timeout
         self.program_running = None
-        self.wrenches = collections.deque(maxlen=3000)  # (stamp, (fx, fy, fz, tx, ty, tz)) in tool0_controller
-        self._lock = threading.Lock()
+        self.wrench = WrenchRecord(rospy, 'wrench')  # the robot's own, in tool0_controller
         self.publisher = rospy.Publisher(HARDWARE_INTERFACE + 'script_command', String, queue_size=1)
         rospy.Subscriber(HARDWARE_INTERFACE + 'robot_program_running', Bool,
                          lambda msg: setattr(self, 'program_running', msg.data), queue_size=1)
-        rospy.Subscriber('wrench', WrenchStamped, self._on_wrench, queue_size=100)
         wait_until_up(rospy, lambda: self.publisher.get_num_connections() > 0, 'subscriber of script_command',
                       timeout)
         wait_until_up(rospy, lambda: self.program_running is not None, 'robot_program_running', timeout)
-
-    def _on_wrench(self, msg):
-        f, t = msg.wrench.force, msg.wrench.torque
-        with self._lock:
-            self.wrenches.append((msg.header.stamp.to_sec(), (f.x, f.y, f.z, t.x, t.y, t.z)))
 
     def run(self, program):
         """Send `program` and wait until it replaced External Control (robot_program_running false)."""
@@ -354,8 +373,7 @@ class UrScript(object):
 
     def wrench_since(self, start, end=float('inf')):
         """The robot's own wrench readings stamped from `start` (s, ROS time) to `end`."""
-        with self._lock:
-            return [w for t, w in self.wrenches if start <= t <= end]
+        return self.wrench.since(start, end)
 
     def resume(self):
         """External Control again: the ROS controllers command the arm."""
