@@ -27,6 +27,8 @@ PARAMETERS = (
 # A loop later than this (wall-clock s) behind its pace starts the pace anew from where it is, instead of
 # running cycles back to back to make up for a stall (a suspended machine, a debugger's breakpoint).
 RESYNC_AFTER = 0.25
+# Without use_sim_time, a cycle that comes this many periods after the last one is late (wall_cycles).
+LATE_AFTER_PERIODS = 1.5
 
 
 class SimClock(object):
@@ -106,7 +108,7 @@ def wall_cycles(elapsed, period, longest):
     """
     late = min(max(elapsed, 0.0), longest)
     cycles = []
-    while late > 1.5 * period:
+    while late > LATE_AFTER_PERIODS * period:
         cycles.append(period)
         late -= period
     cycles.append(late)

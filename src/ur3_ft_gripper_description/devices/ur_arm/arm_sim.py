@@ -463,7 +463,7 @@ def main():
         def step():
             now = rospy.get_time()
             late = now - clock['last']
-            if late > 1.5 * period:
+            if late > sim_clock.LATE_AFTER_PERIODS * period:
                 cycles = sim_clock.wall_cycles(late, period, 10.0 * period)
                 behind = sum(cycles)
                 for dt in cycles[:-1]:
