@@ -51,6 +51,26 @@ def motion_matrix(joint, position):
     return t
 
 
+def cross_matrix(axis):
+    """K with K v = unit(axis) x v: Rodrigues' formula turns by q as I + sin(q) K + (1 - cos(q)) K^2."""
+    x, y, z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def motion_matrices(joint, positions):
+    """motion_matrix for each of an array of `positions`: an (n, 4, 4) stack (Rodrigues' formula)."""
+    positions = np.asarray(positions, dtype=float)
+    t = np.broadcast_to(np.eye(4), positions.shape + (4, 4)).copy()
+    axis = np.asarray(joint.axis or (1.0, 0.0, 0.0), dtype=float)
+    if joint.type in ('revolute', 'continuous'):
+        cross = cross_matrix(axis)
+        turns = positions[..., None, None]
+        t[..., :3, :3] += np.sin(turns) * cross + (1.0 - np.cos(turns)) * cross.dot(cross)
+    elif joint.type == 'prismatic':
+        t[..., :3, 3] = positions[..., None] * axis
+    return t
+
+
 class Model(object):
     """A URDF (urdf_parser_py's `robot`) with forward kinematics between any two links."""
 
@@ -59,6 +79,8 @@ class Model(object):
         self.links = [link.name for link in self.robot.links]
         self.joints = self.robot.joint_map
         self.parent_joint = {joint.child: joint for joint in self.robot.joints}
+        # Each joint's origin as a matrix, made once: tests and exports ask for chains thousands of times.
+        self.origin_matrix = {joint.name: pose_matrix(joint.origin) for joint in self.robot.joints}
 
     def root(self):
         roots = [link for link in self.links if link not in self.parent_joint]
@@ -82,12 +104,27 @@ class Model(object):
                     + (mimic.offset or 0.0))
         return positions.get(joint.name, 0.0)
 
+    def origin(self, joint):
+        """The 4x4 origin of `joint`: kept for the model's own joints, converted for any other."""
+        return self.origin_matrix[joint.name] if self.joints.get(joint.name) is joint else pose_matrix(joint.origin)
+
     def chain_transform(self, joints, positions=None):
         """Product of the joints' origins and motions, e.g. of a list from chain()."""
         positions = positions or {}
         t = np.eye(4)
         for joint in joints:
-            t = t.dot(pose_matrix(joint.origin)).dot(motion_matrix(joint, self.position(joint, positions)))
+            t = t.dot(self.origin(joint)).dot(motion_matrix(joint, self.position(joint, positions)))
+        return t
+
+    def chain_transforms(self, joints, positions):
+        """chain_transform for many joint states at once: `positions` maps joint names to arrays of one
+        length n (a joint it leaves out stands at 0); an (n, 4, 4) stack."""
+        count = len(next(iter(positions.values())))
+        zeros = np.zeros(count)
+        t = np.broadcast_to(np.eye(4), (count, 4, 4))
+        for joint in joints:
+            moved = np.broadcast_to(self.position(joint, positions), (count,)) if joint.type != 'fixed' else zeros
+            t = np.matmul(np.matmul(t, self.origin(joint)), motion_matrices(joint, moved))
         return t
 
     def transform(self, from_link, to_link, positions=None):

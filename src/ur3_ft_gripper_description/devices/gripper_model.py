@@ -8,17 +8,17 @@ ROS_PACKAGE_PATH.
 """
 
 import numpy as np
-import yaml
 
 from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model.names import FINGER_JOINT, PADS
+from ur3_ft_gripper_description import yaml_data
 
 
 
 def load_gripper_spec(path, keys=('stroke',)):
     """The `gripper` section of a YAML file like config/sim_devices.yaml; ValueError if a key is missing."""
     with open(path) as f:
-        data = yaml.safe_load(f) or {}
+        data = yaml_data.load(f) or {}
     spec = data.get('gripper') if isinstance(data, dict) else None
     if not isinstance(spec, dict):
         raise ValueError("%s: no 'gripper' section" % path)
@@ -85,11 +85,15 @@ def pad_gap(left, right, box):
     pads' centres; the gap is the centres' distance along it, less one pad
     thickness (half of each pad's box along that axis).
     """
-    centres = right[:3, 3] - left[:3, 3]
-    axes = left[:3, :3]
-    k = int(np.argmax(np.abs(axes.T.dot(centres))))
-    normal = axes[:, k] * np.sign(axes[:, k].dot(centres))
-    return float(normal.dot(centres) - box[k])
+    return float(pad_gaps(left[None], right[None], box)[0])
+
+
+def pad_gaps(left, right, box):
+    """pad_gap of each pair of an (n, 4, 4) stack of `left` and `right` poses: an array of n gaps."""
+    centres = right[:, :3, 3] - left[:, :3, 3]
+    along = np.einsum('nij,ni->nj', left[:, :3, :3], centres)  # the centres' line along each pad axis
+    k = np.argmax(np.abs(along), axis=1)
+    return np.abs(along[np.arange(len(k)), k]) - np.asarray(box, dtype=float)[k]
 
 
 class GripperKinematics(object):
@@ -145,7 +149,9 @@ class GripperKinematics(object):
         box = _pad_box(self.model.robot.link_map[prefix + PADS[0]])
         self.pad_thickness = tuple(box) if box else (0.0, 0.0, 0.0)
         self.angles = np.linspace(self.lower, self.upper, int(samples))
-        self.openings = np.array([self.opening_exact(a) for a in self.angles])
+        # The whole table at once: thousands of chains, one stack of matrices each pad.
+        left, right = (self.model.chain_transforms(chain, {self.joint_name: self.angles}) for chain in self._chains)
+        self.openings = pad_gaps(left, right, self.pad_thickness)
         if not np.all(np.diff(self.openings) < 0):
             raise ValueError('the pad gap of the model does not shrink monotonically '
                              'as %s goes from %g to %g' % (self.joint_name, self.lower, self.upper))

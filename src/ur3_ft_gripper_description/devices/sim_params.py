@@ -17,7 +17,7 @@ import collections
 import math
 import os
 
-import rospkg
+from ..model.names import shared_rospack
 
 PACKAGE = 'ur3_ft_gripper_description'
 
@@ -160,7 +160,7 @@ def flag(name, value):
 # -- what the device nodes share ------------------------------------------------------------------------
 
 def package_path():
-    return rospkg.RosPack().get_path(PACKAGE)
+    return shared_rospack().get_path(PACKAGE)
 
 
 SIM_DEVICES_FILE = PackageFile('config/sim_devices.yaml')

@@ -20,6 +20,7 @@ import numpy as np
 import yaml
 
 from ..model.inertials import combine_masses
+from .. import yaml_data
 
 STANDARD_GRAVITY = 9.80665  # m/s^2 (CGPM 1901 conventional value)
 
@@ -64,7 +65,7 @@ class SensorSpec(object):
 def load_sensor_spec(path):
     """The `sensor` section of a YAML file like config/sim_devices.yaml."""
     with open(path) as f:
-        data = yaml.safe_load(f) or {}
+        data = yaml_data.load(f) or {}
     if not isinstance(data, dict) or not isinstance(data.get('sensor'), dict):
         raise ValueError("%s: no 'sensor' section" % path)
     sensor = data['sensor']

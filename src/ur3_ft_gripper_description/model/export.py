@@ -10,6 +10,7 @@ one form that MuJoCo, PyBullet, pinocchio, yourdfpy and libsdformat all open
 import os
 
 from ur3_ft_gripper_description.model import description
+from ur3_ft_gripper_description.model.names import shared_rospack
 
 PACKAGE_SCHEME = 'package://'
 FILE_SCHEME = 'file://'
@@ -43,8 +44,7 @@ def resolve_uri(uri, rospack=None):
 
 def absolute_meshes(doc, rospack=None):
     """Rewrite every mesh URI to its absolute path; DescriptionError if a file is missing."""
-    import rospkg
-    rospack = rospack or rospkg.RosPack()
+    rospack = rospack or shared_rospack()
     for mesh in mesh_elements(doc):
         uri = mesh.getAttribute('filename')
         path = os.path.abspath(resolve_uri(uri, rospack))

@@ -31,10 +31,10 @@ coupling's inertial, which this package's macro writes itself).
 import os
 
 import numpy as np
-import yaml
 
 from ur3_ft_gripper_description.model.names import GRIPPER_BASE, child_elements, package_path
 from ur3_ft_gripper_description.number_text import number, number_list
+from ur3_ft_gripper_description import yaml_data
 
 # Parts whose upstream inertials are replaced, by the link names the upstream
 # macros give (before the prefix); the first link of each part anchors the prefix.
@@ -56,7 +56,7 @@ def default_table_path():
 
 def load_table(path=None):
     with open(path or default_table_path()) as f:
-        return yaml.safe_load(f)['links']
+        return yaml_data.load(f)['links']
 
 
 def _inertial_element(doc, mass, com, inertia):

@@ -58,6 +58,7 @@ from ur3_ft_gripper_description import kinematics
 from ur3_ft_gripper_description.model import description, export
 from ur3_ft_gripper_description.model.names import FINGER_JOINT, FLANGE, PADS
 from ur3_ft_gripper_description.number_text import number, number_list
+from ur3_ft_gripper_description import yaml_data
 
 EXCLUDED_REASONS = ('Adjacent', 'Default', 'Always')
 VELOCITY_SUFFIX = '_velocity'
@@ -71,14 +72,14 @@ def _config_path(name):
 def load_physics_figures(path=None):
     """The sections of config/physics.yaml (solver, arm, gripper) as dicts."""
     with open(path or _config_path('physics.yaml')) as f:
-        figures = yaml.safe_load(f)
+        figures = yaml_data.load(f)
     return {section: dict(figures[section]) for section in ('solver', 'arm', 'gripper')}
 
 
 def ft_sensor_frame(path=None):
     """The FT 300's sensor frame (before the prefix): `sensor.frame_id` of config/sim_devices.yaml."""
     with open(path or _config_path('sim_devices.yaml')) as f:
-        return yaml.safe_load(f)['sensor']['frame_id']
+        return yaml_data.load(f)['sensor']['frame_id']
 
 
 
@@ -100,7 +101,7 @@ def collision_matrix(mappings, path=None):
     path = path or os.path.join(description.package_path('ur3_ft_gripper_description'), 'config',
                                 'collision_matrix.yaml')
     with open(path) as f:
-        table = yaml.safe_load(f)['disable_collisions']
+        table = yaml_data.load(f)['disable_collisions']
     parts = '_'.join(part for part in ('ft_sensor', 'gripper')
                      if mappings.get(part, 'true') == 'true') or 'arm'
     ur_type = mappings.get('ur_type', 'ur3')

@@ -16,11 +16,26 @@ class DescriptionError(Exception):
     """Bad input or environment; the message is one line naming problem and fix."""
 
 
+# One rospkg.RosPack per package path: each new one crawls the whole path again (tens of ms), and the
+# package's own files are looked up every time a node, a controller or a test's cell starts.
+_ROSPACKS = {}
+
+
+def shared_rospack():
+    """The process's rospkg.RosPack for the ROS_PACKAGE_PATH (and ROS_ROOT) now set."""
+    import rospkg
+    paths = tuple(rospkg.get_ros_paths())
+    rospack = _ROSPACKS.get(paths)
+    if rospack is None:
+        rospack = _ROSPACKS[paths] = rospkg.RosPack(ros_paths=list(paths))
+    return rospack
+
+
 def package_path(name, rospack=None):
     """Path of ROS package `name`, or DescriptionError naming it."""
     import rospkg
     try:
-        return (rospack or rospkg.RosPack()).get_path(name)
+        return (rospack or shared_rospack()).get_path(name)
     except rospkg.ResourceNotFound:
         raise DescriptionError(
             "ROS package '%s' not found on ROS_PACKAGE_PATH: install it or add its folder there" % name) from None

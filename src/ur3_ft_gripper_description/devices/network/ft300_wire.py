@@ -19,10 +19,9 @@ on. While it streams, it reads nothing but the 0xFF that stop it.
 import struct
 import threading
 
-import yaml
-
 from ..sim_params import PackageFile
 from .modbus_line import PseudoTerminal, RegisterDevice, RtuSlave
+from ... import yaml_data
 
 TABLE_FILE = PackageFile('config/robotiq_ft300_modbus.yaml')
 COUNT_MIN, COUNT_MAX = -32768, 32767
@@ -30,7 +29,7 @@ COUNT_MIN, COUNT_MAX = -32768, 32767
 
 def read_table(path=None):
     with open(path or TABLE_FILE.path()) as stream:
-        return yaml.safe_load(stream)
+        return yaml_data.load(stream)
 
 
 def identity_registers(table, identity):

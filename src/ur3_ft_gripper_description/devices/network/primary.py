@@ -19,12 +19,11 @@ import math
 import socketserver
 import struct
 
-import yaml
-
 from ..sim_params import PackageFile
 from . import listen
 from .versions import available
 from .script_text import ignore_input, read_programs
+from ... import yaml_data
 
 PORTS = {'primary': 30001, 'secondary': 30002}
 # The read-only twins (UR's client interface document): the same packages, nothing taken in.
@@ -66,7 +65,7 @@ class StateLayout(object):
 
     def __init__(self, generation, version, path=None):
         with open(path or TABLE_FILE.path()) as stream:
-            table = yaml.safe_load(stream)
+            table = yaml_data.load(stream)
         self.names, self.packages = [], []
         for name in table['robot_state_order'][generation]:
             package = table['robot_state_sub_packages'][name]

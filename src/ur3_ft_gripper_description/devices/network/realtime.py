@@ -17,12 +17,11 @@ and each program goes to `run(text)`.
 import socketserver
 import struct
 
-import yaml
-
 from ..sim_params import PackageFile
 from . import listen
 from .versions import available
 from .script_text import ignore_input, read_programs
+from ... import yaml_data
 
 PORT = 30003
 READ_ONLY_PORT = 30013  # its read-only twin (UR's overview of the client interfaces): nothing taken in
@@ -38,7 +37,7 @@ class Layout(object):
 
     def __init__(self, generation, version, path=None):
         with open(path or TABLE_FILE.path()) as stream:
-            fields = [f for f in yaml.safe_load(stream)['fields'] if available(f, generation, version)]
+            fields = [f for f in yaml_data.load(stream)['fields'] if available(f, generation, version)]
         self.names = [f['rtde'] for f in fields if f['rtde'] is not None]
         # Where each value goes: ('read', index in names, count) or ('fixed', value, count).
         self.parts = [('read', self.names.index(f['rtde']), f['count']) if f['rtde'] is not None

@@ -16,18 +16,17 @@ import socketserver
 import struct
 import threading
 
-import yaml
-
 from ..sim_params import PackageFile
 from . import listen
 from .modbus_line import MAX_ADU, PseudoTerminal, RegisterDevice, RtuSlave, framings
+from ... import yaml_data
 
 TABLE_FILE = PackageFile('config/robotiq_2f_modbus.yaml')
 
 
 def read_table(path=None):
     with open(path or TABLE_FILE.path()) as stream:
-        return yaml.safe_load(stream)
+        return yaml_data.load(stream)
 
 
 class Layout(object):

@@ -16,10 +16,9 @@ connection stays open.
 
 import socketserver
 
-import yaml
-
 from ..sim_params import PackageFile
 from . import listen
+from ... import yaml_data
 
 MAX_LINE = 1024  # longer than any command: SET with every variable
 TABLE_FILE = PackageFile('config/robotiq_2f_urcap.yaml')
@@ -27,7 +26,7 @@ TABLE_FILE = PackageFile('config/robotiq_2f_urcap.yaml')
 
 def read_table(path=None):
     with open(path or TABLE_FILE.path()) as stream:
-        return yaml.safe_load(stream)
+        return yaml_data.load(stream)
 
 
 class UrcapGripper(object):

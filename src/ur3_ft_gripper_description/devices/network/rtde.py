@@ -25,11 +25,10 @@ import socketserver
 import struct
 import threading
 
-import yaml
-
 from ..sim_params import PackageFile
 from . import listen
 from .versions import available
+from ... import yaml_data
 
 PORT = 30004
 HEADER = struct.Struct('>HB')
@@ -73,7 +72,7 @@ def read_table(generation, version, path=None):
     """{'outputs': {name: type}, 'inputs': {name: type}}: the guide's fields a controller of `generation`
     ('cb3' or 'e_series') at software `version` (a tuple) has, register ranges expanded."""
     with open(path or TABLE_FILE.path()) as stream:
-        data = yaml.safe_load(stream)
+        data = yaml_data.load(stream)
     table = {}
     for direction in ('outputs', 'inputs'):
         fields = table[direction] = {}

@@ -37,6 +37,7 @@ import yaml
 from transforms3d.euler import euler2quat
 
 from ur3_ft_gripper_description.number_text import number, number_list
+from ur3_ft_gripper_description import yaml_data
 
 SHAPES = ('box', 'cylinder', 'mesh')
 MESH_FORMATS = ('.stl', '.obj')
@@ -215,7 +216,7 @@ def load_world(path):
     """The World of the YAML file at `path`; WorldError (one line, naming the field) if it is bad."""
     try:
         with open(path) as f:
-            data = yaml.safe_load(f)
+            data = yaml_data.load(f)
     except OSError as exc:
         raise WorldError('%s: cannot read the world file (%s): give the path of a world file, e.g. '
                          'config/worlds/default.yaml' % (path, exc.strerror or exc)) from None

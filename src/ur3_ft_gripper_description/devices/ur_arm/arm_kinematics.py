@@ -27,15 +27,17 @@ from transforms3d.axangles import axangle2mat
 
 from ur3_ft_gripper_description import kinematics
 
-
-def _cross_matrix(axis):
-    """K with K v = unit(axis) x v."""
-    x, y, z = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
-    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+IDENTITY3 = np.eye(3)
+# Joint positions whose kinematics are kept: a cycle's actual, target and commanded positions, and a spare.
+CACHED_POSITIONS = 4
 
 
 class ArmKinematics(object):
     def __init__(self, urdf_text, joints, base='base', tip='tool0'):
+        # A control cycle asks for the same joint positions' kinematics many times (the tool pose, the
+        # RTDE fields' speeds and elbow, force mode's Jacobian): each is computed once and kept
+        # read-only; callers get copies.
+        self._computed = {}
         model = kinematics.Model(urdf_text)
         root = model.root()
         if root is None or base not in model.links or tip not in model.links:
@@ -71,30 +73,36 @@ class ArmKinematics(object):
         self.segment_fixed = np.array([fixed for fixed, _, _, _ in self.segments])
         self.segment_joint = [index for _, _, _, index in self.segments]
         self.segment_axes = np.array([axis for _, _, axis, _ in self.segments])
-        self.cross_matrices = np.array([_cross_matrix(axis) for axis in self.segment_axes])
+        self.cross_matrices = np.array([kinematics.cross_matrix(axis) for axis in self.segment_axes])
         self.cross_squared = np.matmul(self.cross_matrices, self.cross_matrices)
         self.nominal = NominalUr.from_arm(self)
 
     def _links(self, positions):
         """Each moving joint's fixed transform times its rotation (all revolute), in chain order."""
         q = np.asarray(positions, dtype=float)[self.segment_joint][:, None, None]
-        turns = np.eye(3) + np.sin(q) * self.cross_matrices + (1.0 - np.cos(q)) * self.cross_squared
+        turns = IDENTITY3 + np.sin(q) * self.cross_matrices + (1.0 - np.cos(q)) * self.cross_squared
         links = self.segment_fixed.copy()
         links[:, :3, :3] = np.matmul(self.segment_fixed[:, :3, :3], turns)
         return links
 
     def forward(self, positions):
         """4x4 pose of the tip in the base for joint positions in `joints` order."""
-        if not self.all_revolute:
-            return self._chain(positions)[0]
-        links = self._links(positions)
-        pose = links[0]
-        for link in links[1:]:
-            pose = pose.dot(link)
-        return pose.dot(self.tail)
+        return self._chain(positions)[0].copy()
 
     def _chain(self, positions):
-        """The tip's pose, and each actuated joint's axis and origin in the base (controller order)."""
+        """The tip's pose, and each actuated joint's axis and origin in the base (controller order), read-only."""
+        key = np.asarray(positions, dtype=float).tobytes()
+        computed = self._computed.get(key)
+        if computed is None:
+            computed = self._compute_chain(positions)
+            for array in computed:
+                array.setflags(write=False)
+            if len(self._computed) >= CACHED_POSITIONS:
+                del self._computed[next(iter(self._computed))]
+            self._computed[key] = computed
+        return computed
+
+    def _compute_chain(self, positions):
         if self.all_revolute:
             # A joint turns about its own axis through its frame's origin: the frame after the turn
             # has the same axis and origin, so the running product of the links gives both.
@@ -108,7 +116,7 @@ class ArmKinematics(object):
             points[self.segment_joint] = frames[:, :3, 3]
             return pose.dot(self.tail), axes, points
         t = np.eye(4)
-        axes, points = [None] * len(self.joints), [None] * len(self.joints)
+        axes, points = np.empty((len(self.joints), 3)), np.empty((len(self.joints), 3))
         for fixed, joint, axis, index in self.segments:
             t = t.dot(fixed)
             axes[index] = t[:3, :3].dot(axis)
@@ -118,7 +126,7 @@ class ArmKinematics(object):
 
     def joint_axes(self, positions):
         """(axes, origins): each actuated joint's axis and origin in the base, controller order."""
-        return self._chain(positions)[1:]
+        return tuple(array.copy() for array in self._chain(positions)[1:])
 
     def jacobian(self, positions, tcp=None):
         """6xN geometric Jacobian of the tip in the base frame (revolute joints): linear, then angular.

@@ -16,6 +16,7 @@ at one time"); a switch that would make them is refused whatever the strictness.
 """
 
 import yaml
+from ... import yaml_data
 
 # controller type -> hardware interface of its claimed joints (none: read-only)
 CLAIMS = {
@@ -50,7 +51,7 @@ def read_config(path):
     """A <ur_type>_controllers.yaml as parsed, checked to be ur_robot_driver's; ControllerConfigError if not."""
     try:
         with open(path) as stream:
-            data = yaml.safe_load(stream)
+            data = yaml_data.load(stream)
     except (OSError, yaml.YAMLError) as exc:
         raise ControllerConfigError('%s: %s' % (path, exc))
     if not isinstance(data, dict) or 'ur_hardware_interface' not in data:

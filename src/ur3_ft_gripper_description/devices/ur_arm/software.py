@@ -7,9 +7,8 @@ as ur_robot_driver derives it (major < 5: CB3, else e-Series).
 
 import os
 
-import yaml
-
 from .. import sim_params
+from ... import yaml_data
 
 CB3, E_SERIES = 'CB3', 'e-Series'
 # Each generation's key in the network interfaces' tables (config/rtde_variables.yaml and the others).
@@ -26,7 +25,7 @@ def default_table_file():
 
 def _read_entries(path=None):
     with open(path or default_table_file()) as stream:
-        return yaml.safe_load(stream)
+        return yaml_data.load(stream)
 
 
 def _version(entry):
