@@ -9,7 +9,8 @@ with it; joint_state_controller one joint state per control period; the
 (rq_sensor's start, frames as its manual lays them out) one frame per
 reading, the same values as the topic's message of that reading. The real-time factor the arm's node reports is
 checked against what /clock and this process's wall clock show over the
-same window.
+same window, and /clock's own steps against the rate the launch asked for
+(every control period, or pub_clock_frequency's stride).
 
 Throughout the window, bad programs arrive on script_command: seeded mutants
 of the URScript corpus (ur3_ft_gripper_testing.urscript_mutants), one every
@@ -223,6 +224,7 @@ class SimClockTest(unittest.TestCase):
     def setUpClass(cls):
         rospy.init_node('sim_clock_check')
         cls.loop_hz = float(rospy.get_param('~loop_hz'))
+        cls.clock_step_ns = int(round(float(rospy.get_param('~clock_step')) * 1e9))
         cls.streams = Streams()
         # The cell is up once every stream flows; counting starts a simulated second later.
         rostest_helpers.wait_for(lambda: cls.streams.arm and cls.streams.wrench and cls.streams.gripper,
@@ -268,6 +270,15 @@ class SimClockTest(unittest.TestCase):
         stamps = [stamp for stamp, _ in published[first:first + len(streamed)]]
         # Every reading of the window went out as a frame: 1,000 in 10 simulated seconds.
         self.assertEqual(len(in_window(stamps, self.start_ns, self.end_ns)), round(SPAN / FT_PERIOD))
+
+    def test_ros_time_moves_in_the_steps_of_the_clock_rate_asked(self):
+        with self.streams.lock:
+            ticks = [int(round(c * 1e9)) for _, c in self.streams.clock if self.start <= c < self.end]
+        # rospy drops the oldest /clock messages of a subscriber that falls behind, so some gaps may span
+        # several steps; none is shorter, and every tick is on the step's grid.
+        self.assertGreater(len(ticks), 100)
+        self.assertEqual({t % self.clock_step_ns for t in ticks}, {0}, 'ticks off a %d ns grid' % self.clock_step_ns)
+        self.assertEqual(min(b - a for a, b in zip(ticks, ticks[1:])), self.clock_step_ns, 'the shortest step (ns)')
 
     def test_joint_states_come_once_per_control_period(self):
         period = 1.0 / self.loop_hz

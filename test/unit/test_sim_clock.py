@@ -2,7 +2,7 @@
 import pytest
 
 from ur3_ft_gripper_description.devices import sim_params
-from ur3_ft_gripper_description.devices.sim_clock import SimClock, check_factor, wall_cycles
+from ur3_ft_gripper_description.devices.sim_clock import SimClock, check_factor, clock_stride, wall_cycles
 
 
 class Wall(object):
@@ -89,3 +89,36 @@ def test_on_the_wall_clock_a_late_cycle_is_made_up_in_periods_of_the_robot(perio
     cycles = wall_cycles(periods * period, period, longest)
     assert sum(cycles) == pytest.approx(min(periods * period, longest))  # the time the host let pass, capped
     assert all(c == period for c in cycles[:-1]) and 0.0 <= cycles[-1] <= 1.5 * period
+
+
+@pytest.mark.parametrize('loop_hz, frequency, stride, clock_hz', [
+    (500, 0.0, 1, 500.0),    # the default: every control cycle
+    (500, 100.0, 5, 100.0),  # an e-Series at Gazebo's usual 100 Hz: ROS time in 10 ms steps
+    (500, 120.0, 4, 125.0),  # never below the rate asked: 125 Hz, not 100
+    (125, 100.0, 1, 125.0),  # a CB3's 8 ms periods already meet it
+    (500, 1000.0, 1, 500.0),  # above the control rate: every cycle, no faster
+])
+def test_clock_goes_out_every_whole_stride_of_cycles_never_below_the_rate_asked(loop_hz, frequency, stride,
+                                                                                   clock_hz):
+    assert clock_stride(True, loop_hz, frequency, 100.0) == stride
+    clock = SimClock(loop_hz, 0.0, stride=stride)
+    published = []
+    for _ in range(loop_hz):  # one simulated second
+        clock.tick()
+        if clock.published:
+            published.append(clock.nanoseconds)
+    assert len(published) == clock_hz
+    assert {b - a for a, b in zip(published, published[1:])} == {round(1e9 / clock_hz)}
+    assert published[-1] == 1000000000  # the second's last cycle is on /clock
+
+
+@pytest.mark.parametrize('use_sim_time, frequency, named', [
+    (True, 50.0, 'at least 100 Hz'),   # the FT 300's 100 Hz would come two samples at a time
+    (False, 100.0, 'use_sim_time:=true'),
+])
+def test_a_clock_rate_that_would_batch_a_stream_or_has_no_clock_is_refused_in_one_line(use_sim_time, frequency,
+                                                                                      named):
+    with pytest.raises(sim_params.ParamError) as error:
+        clock_stride(use_sim_time, 500, frequency, 100.0)
+    assert '~pub_clock_frequency=%g' % frequency in str(error.value) and named in str(error.value)
+    assert '\n' not in str(error.value)

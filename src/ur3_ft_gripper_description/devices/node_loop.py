@@ -207,7 +207,8 @@ def cycle_publisher(rospy, topic, message_class, queue_size, on_sim_clock):
 
 
 def run_as_clock(rospy, clock, step, check_period=2.0):
-    """The simulated cell's clock loop: per cycle, `clock.tick()`, /clock, `step(period, stamp)`, the pace's wait.
+    """The simulated cell's clock loop: per cycle, `clock.tick()`, /clock (on the cycles `clock.published` names),
+    `step(period, stamp)`, the pace's wait.
 
     `clock` is a sim_clock.SimClock; `stamp` is the cycle's simulated time as a rospy.Time, which
     everything the cycle publishes carries. Another node publishing /clock (a bag played with --clock,
@@ -251,7 +252,8 @@ def run_as_clock(rospy, clock, step, check_period=2.0):
 
     def cycle():
         message.clock = rospy.Time(*divmod(clock.nanoseconds, 1000000000))
-        publisher.publish(message)
+        if clock.published:
+            publisher.publish(message)
         step(clock.period, message.clock)
         return True
 

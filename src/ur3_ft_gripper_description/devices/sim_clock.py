@@ -14,6 +14,7 @@ as the machine allows). A machine too busy to keep the pace makes the whole
 cell slower, and changes nothing of what happens in it.
 """
 
+import math
 import time
 
 from . import sim_params
@@ -22,6 +23,13 @@ PARAMETERS = (
     sim_params.Param('~real_time_factor', 1.0, 'With use_sim_time (the node publishes /clock): simulated seconds '
                      'per wall-clock second the cell is paced to; 0: as fast as the machine allows. Without '
                      'use_sim_time only 1 (the wall clock) is possible', sim_params.number(minimum=0.0)),
+    sim_params.Param('~pub_clock_frequency', 0.0, 'With use_sim_time: the least rate of /clock (Hz of simulated '
+                     "time), as Gazebo's pub_clock_frequency. /clock then goes out every N control cycles, N the "
+                     'most that keep it at or above this rate, so every node\'s ROS time moves in steps of at '
+                     'most 1/rate; the arm\'s streams keep their rates and stamps. 0: every control cycle (2 ms '
+                     'on an e-Series). At least the FT 300\'s rate (100 Hz), which samples on ROS time. Every '
+                     'node reads every /clock message: fewer make a cell faster than real time run faster',
+                     sim_params.number(minimum=0.0)),
 )
 
 # A loop later than this (wall-clock s) behind its pace starts the pace anew from where it is, instead of
@@ -38,7 +46,7 @@ class SimClock(object):
     time), the cycle's work, and a wait of ``pause()`` wall-clock seconds.
     """
 
-    def __init__(self, hz, factor=1.0, wall=time.monotonic, resync_after=RESYNC_AFTER):
+    def __init__(self, hz, factor=1.0, wall=time.monotonic, resync_after=RESYNC_AFTER, stride=1):
         if not hz > 0:
             raise ValueError('a clock of %r Hz: the rate must be above 0' % (hz,))
         if not factor >= 0:
@@ -46,6 +54,7 @@ class SimClock(object):
         # Whole nanoseconds, as /clock carries them: 125 Hz and 500 Hz give 8 ms and 2 ms exactly.
         self.period_ns = int(round(1e9 / hz))
         self.factor = float(factor)
+        self.stride = int(stride)  # control cycles per /clock message (clock_stride)
         self.cycles = 0
         self._wall = wall
         self._resync_after = float(resync_after)
@@ -65,6 +74,11 @@ class SimClock(object):
     def time(self):
         """Simulated time (s)."""
         return self.nanoseconds * 1e-9
+
+    @property
+    def published(self):
+        """The cycle just ticked ends a stride: /clock carries its time."""
+        return self.cycles % self.stride == 0
 
     def start(self):
         """The pace counts from now."""
@@ -96,6 +110,21 @@ def check_factor(use_sim_time, factor):
         raise sim_params.ParamError('~real_time_factor=%g needs use_sim_time:=true: on the wall clock the cell '
                                     'runs at real time (1)' % factor)
     return factor
+
+
+def clock_stride(use_sim_time, loop_hz, frequency, least_hz):
+    """Control cycles per /clock message for ~pub_clock_frequency `frequency` (0: every cycle); ParamError
+    naming the fix when it cannot be kept. `least_hz` is the fastest rate another node of the cell samples at on
+    ROS time: a clock in coarser steps would make it serve several samples at once."""
+    if frequency == 0.0:
+        return 1
+    if not use_sim_time:
+        raise sim_params.ParamError('~pub_clock_frequency=%g needs use_sim_time:=true: on the wall clock the node '
+                                    'publishes no /clock' % frequency)
+    if frequency < least_hz:
+        raise sim_params.ParamError('~pub_clock_frequency=%g: use 0 (every control cycle) or at least %g Hz, the '
+                                    'FT 300\'s rate, which samples on ROS time' % (frequency, least_hz))
+    return max(1, int(math.floor(loop_hz / frequency + 1e-9)))
 
 
 def wall_cycles(elapsed, period, longest):

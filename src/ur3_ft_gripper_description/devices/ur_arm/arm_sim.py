@@ -81,8 +81,8 @@ class ArmSim(object):
         settings = read_settings(get_param)
         self.prefix, self.loop_hz = settings.prefix, settings.loop_hz
         # On simulated time the node is the clock: what it publishes carries the cycle's time.
-        self.clock = sim_clock.SimClock(settings.loop_hz, settings.real_time_factor) if settings.use_sim_time \
-            else None
+        self.clock = sim_clock.SimClock(settings.loop_hz, settings.real_time_factor, stride=settings.clock_stride) \
+            if settings.use_sim_time else None
         self.physics = None
         if sim_params.read(get_param, PARAMETERS, '~physics'):
             from ..physics.host import CellHost
@@ -336,14 +336,14 @@ class ArmSim(object):
 
     # -- the control cycle -----------------------------------------------------------------------
 
-    def step(self, dt, stamp=None):
-        """One control cycle of `dt` s; what it publishes is stamped `stamp` (default: ROS time now)."""
+    def step(self, dt, stamp):
+        """One control cycle of `dt` s; what it publishes is stamped `stamp`, the time the cycle integrates to."""
         with self.lock:
             snapshot = self.core.step(dt)
             if self.network is not None:
                 self.network.after_cycle(dt, snapshot)
         self._report()
-        self._publish(snapshot, stamp or self.rospy.Time.now())
+        self._publish(snapshot, stamp)
         self.action_status.step(dt)
         if self.physics is not None:
             self.physics.after_step()
@@ -470,7 +470,9 @@ def main():
                     behind -= dt
                     sim.step(dt, rospy.Time.from_sec(now - behind))
                 late = cycles[-1]
-            sim.step(max(late, 0.0))
+            # Stamped with the time the cycle integrated to, not the time it publishes: a process
+            # preempted in between would stamp a state later than the one it holds.
+            sim.step(max(late, 0.0), rospy.Time.from_sec(now))
             clock['last'] = now
 
         def restart_clock():
