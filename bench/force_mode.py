@@ -10,9 +10,10 @@ period (ur3 settings: 8 ms; the same cell at 2 ms, as an e-Series runs it):
 - holding: External Control idle, no program;
 - pressing: the example's program, force_mode along the tool's z at 20 N,
   measured once the press has settled on the table: each cycle steps the
-  admittance, cancels the servos' cross pull (force_mode.uncoupled: a
-  Jacobian, its inverse, the servos' stiffness in the force frame, one small
-  solve) and solves the displaced pose's inverse kinematics.
+  admittance against the servos' damping at the TCP (a Jacobian, its
+  inverse), cancels the servos' cross pull (force_mode.uncoupled: their
+  stiffness in the force frame, one small solve) and solves the displaced
+  pose's inverse kinematics to under a nanometre.
 CPU time of this process per control cycle (ArmCore.step, MuJoCo's timesteps
 included), in chunks of `seconds` of simulated time, the two cases
 interleaved; the table shows the median over `runs` runs and the ratio.

@@ -161,6 +161,7 @@ class Cell(object):
         self._arm_qpos = _index([m.jnt_qposadr[j] for j in joint_ids])
         self._arm_dofs = _index([m.jnt_dofadr[j] for j in joint_ids])
         self._arm_kp = np.array([m.actuator(n).gainprm[0] for n in self.arm_joints])
+        self._arm_kv = np.array([m.actuator(n + mjcf.VELOCITY_SUFFIX).gainprm[0] for n in self.arm_joints])
         # Views of the arm's parts of ctrl and of the dofs' arrays, which MuJoCo's vector functions write
         # into at every timestep: export_mjcf writes the arm's joints and servos in order.
         if not all(isinstance(ids, slice) for ids in (self._arm_position_ctrl, self._arm_velocity_ctrl,
@@ -474,6 +475,11 @@ class Cell(object):
     def arm_stiffness(self):
         """The arm's position servos' gains (N m/rad, in arm_joints' order), as a copy."""
         return self._arm_kp.copy()
+
+    @property
+    def arm_servo_damping(self):
+        """The arm's velocity servos' gains (N m s/rad, in arm_joints' order), as a copy."""
+        return self._arm_kv.copy()
 
     @property
     def arm_position(self):

@@ -39,6 +39,14 @@ robot then pushes along the compliant axes only, as the force it
 controls, and holds the others where the program wants them. The lead
 is counted from where the admittance's own motion takes the TCP, so in
 free air, where the TCP keeps up, the target is the displaced pose alone.
+
+Those servos also damp: the commanded speed is fed forward, and where the
+tool is held, a change of it comes back within the cycle as the servos'
+damping force (their velocity gains at the TCP, J^-T Kv J^-1). Against
+that force the admittance is integrated implicitly (the virtual mass
+plus that damping times the period): explicitly, the loop's gain per
+cycle is C dt / M, which reaches 2 at the CB3's 8 ms on a pressed tool,
+and the force then rings at half the control rate instead of settling.
 """
 
 import math
@@ -50,6 +58,7 @@ from .arm_kinematics import pose_error, rotation_matrix
 # The admittance's virtual mass (kg) and moment of inertia (kg m^2).
 VIRTUAL_MASS = 10.0
 VIRTUAL_INERTIA = 0.05
+INERTIA = (VIRTUAL_MASS,) * 3 + (VIRTUAL_INERTIA,) * 3
 # At damping 1 the speed loses this fraction per second (the manual's "decelerates quickly").
 FULL_DAMPING_RATE = 125.0
 DEFAULT_DAMPING = 0.005
@@ -111,17 +120,21 @@ class ForceMode(object):
             y = np.cross(z, x)
         return np.column_stack((x, y, z))
 
-    def step(self, dt, tcp_position, external_wrench):
+    def step(self, dt, tcp_position, external_wrench, servo_damping=None):
         """(linear, angular) displacement of the TCP in base axes over `dt` s.
 
         `external_wrench`: the robot's own TCP wrench in base axes (what the world exerts on the tool).
+        `servo_damping`: on joint servos that give, their damping at the TCP (6x6, base axes:
+        servos_at_tcp of their velocity gains), which the admittance is integrated against.
         """
         frame = self.frame = self.force_frame(tcp_position)
         external = np.asarray(external_wrench, dtype=float)
-        applied = -np.concatenate((frame.T.dot(external[:3]), frame.T.dot(external[3:])))
+        applied = -_in_frame(frame, external)
         error = self.gain_scaling * (self.wrench - applied)
-        inertia = np.array([VIRTUAL_MASS] * 3 + [VIRTUAL_INERTIA] * 3)
         braking = math.exp(-FULL_DAMPING_RATE * self.damping * dt)
+        inertia = np.array(INERTIA)
+        if servo_damping is not None:
+            inertia += self._servo_inertia(frame, servo_damping) * dt
         velocity = self.velocity * braking + error / inertia * dt
         velocity = np.clip(velocity, -self.limits, self.limits)
         velocity[~self.selection] = 0.0
@@ -129,6 +142,20 @@ class ForceMode(object):
         linear, angular = frame.dot(velocity[:3]) * dt, frame.dot(velocity[3:]) * dt
         self.tcp_velocity = linear / dt if dt > 0 else np.zeros(3)
         return linear, angular
+
+    def _servo_inertia(self, frame, servo_damping):
+        """Per axis of the force frame, the servos' damping the admittance meets there (N s/m, N m s/rad):
+        on the linear and on the angular compliant axes alike, the strongest of that block (its largest
+        eigenvalue), so that the loop stays below one per cycle along any direction, and no axis steers
+        another (in free air the tool keeps up and the servos' damping does not push)."""
+        rotation = _rotation6(frame)
+        damping = rotation.T.dot(servo_damping).dot(rotation)
+        per_axis = np.zeros(6)
+        for block in (slice(0, 3), slice(3, 6)):
+            chosen = np.flatnonzero(self.selection[block]) + block.start
+            if len(chosen):
+                per_axis[chosen] = np.linalg.eigvalsh(damping[np.ix_(chosen, chosen)])[-1]
+        return per_axis
 
 
 def displaced(pose, linear, angular):
@@ -139,6 +166,20 @@ def displaced(pose, linear, angular):
         moved[:3, :3] = rotation_matrix(angular).dot(moved[:3, :3])
     return moved
 
+
+def _rotation6(frame):
+    """The 6x6 that turns a (linear, angular) 6-vector of `frame`'s axes (3x3) into base axes."""
+    rotation = np.zeros((6, 6))
+    rotation[:3, :3] = rotation[3:, 3:] = frame
+    return rotation
+
+
+def servos_at_tcp(jacobian, gains):
+    """Joint servos' gains (one per joint: N m/rad, or N m s/rad) as the TCP meets them: J^-T diag(gains) J^-1
+    (6x6, base axes), the wrench per displacement (or per speed) of the TCP. `jacobian`: the TCP's 6xN
+    geometric Jacobian (base axes)."""
+    inverse = np.linalg.inv(jacobian)  # joint offsets per displacement of the TCP
+    return inverse.T.dot(inverse * np.asarray(gains, dtype=float)[:, None])
 
 
 def _in_frame(frame, six):
@@ -174,10 +215,8 @@ def uncoupled(jacobian, stiffness, frame, selection, ahead):
     held, pushed = np.flatnonzero(~selection), np.flatnonzero(selection)
     if not len(held) or not len(pushed):
         return np.zeros(3), np.zeros(3)
-    rotation = np.zeros((6, 6))
-    rotation[:3, :3] = rotation[3:, 3:] = frame
-    along = np.linalg.inv(jacobian).dot(rotation)  # J^-1 R: joint offsets per displacement along the frame's axes
-    cartesian = along.T.dot(along * stiffness[:, None])  # R^T J^-T K J^-1 R: the servos' stiffness, force frame
+    rotation = _rotation6(frame)
+    cartesian = rotation.T.dot(servos_at_tcp(jacobian, stiffness)).dot(rotation)  # the servos' stiffness, force frame
     shift = np.zeros(6)
     shift[held] = -np.linalg.solve(cartesian[held][:, held], cartesian[held][:, pushed].dot(ahead[pushed]))
     base = rotation.dot(shift)

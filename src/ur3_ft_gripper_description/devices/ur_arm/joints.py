@@ -83,6 +83,7 @@ class KinematicJoints(object):
         self.protective_stop = None
         self.flange_wrench = None
         self.stiffness = None  # rigid: no servo gives
+        self.servo_damping = None  # nor damps
 
     @classmethod
     def from_settings(cls, settings):

@@ -68,6 +68,11 @@ class PhysicsJointMotion(object):
         return self.cell.arm_stiffness
 
     @property
+    def servo_damping(self):
+        """The velocity servos' gains (N m s/rad, one per joint): the reference's speed they push towards."""
+        return self.cell.arm_servo_damping
+
+    @property
     def flange_wrench(self):
         return self.cell.flange_wrench()
 
