@@ -4,7 +4,7 @@
   `ur3_ft_gripper_bringup.launch sim:=true physics:=true world:=...` on its own rosmaster; the arm's
   node says what is wrong in one line naming the file and the field, and, being required, ends the
   launch.
-- A real-time factor that is negative or not a number, and a second node publishing /clock beside the
+- A real-time factor that is negative or not a number, a /clock rate below the FT 300's, and a second node publishing /clock beside the
   simulated cell's clock (a bag played with --clock): one line from the arm's node, and the launch ends.
 - MuJoCo not installed: the arm's node run with physics by a Python that has everything the
   workspace's has but MuJoCo (a venv made here from the workspace's, its packages linked in but
@@ -98,10 +98,14 @@ def test_a_bad_world_file_is_one_line_and_ends_the_launch(case, tmp_path):
     assert 'ur_hardware_interface' in line
 
 
-@pytest.mark.parametrize('factor, words', [('-1', ['~real_time_factor', 'must be >= 0']),
-                                           ('fast', ['~real_time_factor', 'is not a number'])])
-def test_a_bad_real_time_factor_is_one_line_and_ends_the_launch(factor, words, tmp_path):
-    line = one_line(launch_until_it_ends(tmp_path, ['real_time_factor:=%s' % factor]), words)
+@pytest.mark.parametrize('argument, words', [
+    ('real_time_factor:=-1', ['~real_time_factor', 'must be >= 0']),
+    ('real_time_factor:=fast', ['~real_time_factor', 'is not a number']),
+    # /clock in 20 ms steps would make the FT 300's node serve two of its 10 ms samples at once.
+    ('pub_clock_frequency:=50', ['~pub_clock_frequency=50', 'use 0 (every control cycle) or at least 100 Hz']),
+])
+def test_a_bad_clock_setting_is_one_line_and_ends_the_launch(argument, words, tmp_path):
+    line = one_line(launch_until_it_ends(tmp_path, [argument]), words)
     assert 'ur_hardware_interface' in line and '[FATAL]' in line
 
 

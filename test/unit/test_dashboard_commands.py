@@ -29,9 +29,12 @@ CLIENT_PATTERNS = {
     'close safety popup': r'closing safety popup',
     'popup hello': r'showing popup',
     'addToLog hello': r'Added log message',
+    # commandGenerateFlightReport's and commandGenerateSupportFile's patterns (not their table's)
+    'generate flight report controller': r'(?:Flight Report generated with id:).*',
+    'generate support file /programs': r'(?:Completed successfully:).*',
 }
 CB3_ONLY = ['getUserRole', 'setUserRole PROGRAMMER']
-E_SERIES_ONLY = ['get operational mode', 'set operational mode AUTOMATIC', 'clear operational mode',
+E_SERIES_ONLY = ['version', 'get operational mode', 'set operational mode AUTOMATIC', 'clear operational mode',
                  'is in remote control']
 
 
@@ -90,12 +93,15 @@ def test_an_e_series_sets_gets_and_clears_its_operational_mode_as_on_ursim():
     ('ur5e', (5, 5, 0, 0), 'get serial number'),  # e-Series 5.6 on
     ('ur3', (3, 11, 0, 0), 'get robot model'),    # CB3 3.12 on
     ('ur5e', (5, 7, 0, 0), 'saveLog'),            # e-Series 5.8 on
+    ('ur3', (3, 12, 0, 0), 'generate flight report system'),  # CB3 3.13 on
+    ('ur5e', (5, 7, 0, 0), 'generate support file /programs'),  # e-Series 5.8 on
     ('ur5e', (5, 0, 0, 0), 'restart safety'),     # e-Series 5.1 on
 ])
 def test_a_command_newer_than_the_software_is_not_understood_and_the_release_that_added_it_answers(
         ur_type, version, command):
     assert robot(ur_type, version).dashboard(command) == not_understood(command)
-    added = tuple(int(part) for part in str(dashboard_commands.read().entries[command.lower()][
+    table = dashboard_commands.read()
+    added = tuple(int(part) for part in str(table.entries[table.match(command)[0]][
         software.for_model(ur_type).generation]).split('.'))
     assert robot(ur_type, added + (0,) * (4 - len(added))).dashboard(command) != not_understood(command)
 
@@ -123,3 +129,21 @@ def test_each_command_of_the_table_either_acts_or_has_a_fixed_reply_and_each_act
                if name.startswith('_dashboard_')}
     assert actions <= set(table.entries), actions - set(table.entries)
     assert [key for key in table.entries if key not in actions and not table.reply(key)] == []
+
+
+def test_an_e_series_tells_its_full_version_and_a_cb3_only_through_polyscopeversion():
+    e_series = robot('ur5e')
+    assert e_series.dashboard('version') == e_series.software.version_text == '5.9.4.0'
+    assert e_series.dashboard('PolyscopeVersion') == 'URSoftware 5.9.4.0'
+
+
+def test_flight_reports_take_the_articles_report_types_and_the_support_file_names_the_robot_and_its_day():
+    e_series = robot('ur5e')
+    ids = [e_series.dashboard('generate flight report ' + kind) for kind in ('controller', 'Software', 'SYSTEM')]
+    assert ids == ['Flight Report generated with id: %d' % n for n in (1, 2, 3)]
+    assert e_series.dashboard('generate flight report everything') == \
+        not_understood('generate flight report everything')
+    name = e_series.dashboard('generate support file /programs')
+    assert re.fullmatch(r'Completed successfully: ur_%s_\d{4}-\d\d-\d\d_\d\d-\d\d-\d\d\.zip'
+                        % e_series.software.serial_number, name), name
+    assert e_series.dashboard('generate support file') == not_understood('generate support file')

@@ -10,12 +10,12 @@ import os
 
 import numpy as np
 import pytest
-import rospkg
 import yaml
 from transforms3d.quaternions import mat2quat
 
 from ur3_ft_gripper_description.devices import sim_clock, sim_params
 from ur3_ft_gripper_description.devices.ur_arm import core as arm_core
+from ur3_ft_gripper_description.model.names import shared_rospack
 from ur3_ft_gripper_description.devices.ur_arm import controller_manager as cm
 from ur3_ft_gripper_description.devices.ur_arm import joints as jm
 from ur3_ft_gripper_description.devices.ur_arm import robot_state as rs
@@ -42,7 +42,7 @@ CONTROL_HZ = {'CB3': 125, 'e-Series': 500}
 
 
 def driver_config(ur_type):
-    return os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', '%s_controllers.yaml' % ur_type)
+    return os.path.join(shared_rospack().get_path('ur_robot_driver'), 'config', '%s_controllers.yaml' % ur_type)
 
 
 def make_settings(configured_model, ur_type='ur5e', **params):
@@ -92,10 +92,14 @@ def tool_pose(core):
     return core.arm.forward(core.motion.position)
 
 
+def tcp_pose(core):
+    return tool_pose(core).dot(core.tcp)
+
+
 # -- the model table: every model both packages know -------------------------------------------
 
 def both_know():
-    config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config')
+    config = os.path.join(shared_rospack().get_path('ur_robot_driver'), 'config')
     driver = {name[:-len('_controllers.yaml')] for name in os.listdir(config) if name.endswith('_controllers.yaml')}
     return sorted(driver & set(description.ur_types()))
 
@@ -378,6 +382,17 @@ def test_script_outputs_show_on_io_states_by_their_pin_numbers(arm):
     assert arm.robot.program_running  # a secondary program runs beside the External Control program
 
 
+def test_an_io_function_given_a_string_for_a_number_stops_with_the_robots_type_error(arm):
+    for call, words in (('set_standard_digital_out("half ", True)', 'set_standard_digital_out takes a number, '
+                                                                      'not string'),
+                        ('set_standard_analog_out(0, "1 V")', 'set_standard_analog_out takes a number, not string'),
+                        ('x = get_standard_digital_in([1])', 'get_standard_digital_in takes a number, not list')):
+        arm.script_command('def p():\n  %s\nend' % call)
+        run(arm, 2 * DT)
+        level, text = arm.take_messages()[-1]
+        assert level == arm_core.ERROR and 'Runtime error in line 2' in text and 'Type error: ' + words in text, text
+
+
 def test_the_general_purpose_registers_take_the_manuals_addresses_and_values(arm):
     arm.robot.registers.write('input', 'integer', 47, 7)
     arm.script_command('def p():\n  write_output_integer_register(0, read_input_integer_register(47) * 6)\n'
@@ -483,6 +498,19 @@ def test_force_mode_without_physics_runs_the_compliant_axis_at_its_speed_limit(a
     assert speed[2] == pytest.approx(0.02, rel=0.01)
     assert np.allclose(speed[:2], 0.0, atol=1e-6) and np.allclose(middle[:2], start[:2], atol=1e-6)
     assert arm.tcp_force()[0] == pytest.approx(np.zeros(6))
+
+
+def test_force_mode_near_a_wrist_singularity_reaches_what_the_inverse_kinematics_reaches(arm):
+    # wrist_2 a milliradian off 0, where wrist_1's and wrist_3's axes line up: there force mode's nanometre
+    # reach does not converge, and the inverse kinematics' default reach still takes the pose.
+    arm.script_command('def p():\n  movej([0.3, -1.4, 1.6, -1.8, 0.001, 0.2], a=3, v=3)\n'
+                       '  force_mode(get_actual_tcp_pose(), [0, 0, 1, 0, 0, 0], [0, 0, 10, 0, 0, 0], 2, '
+                       '[0.1, 0.1, 0.02, 0.17, 0.17, 0.17])\n  sleep(1)\n  end_force_mode()\nend')
+    run_until(arm, lambda: arm.script_robot.force is not None, 5.0)
+    start = tcp_pose(arm)[:3, 3]
+    run(arm, 0.25)
+    assert arm.script_running and arm.take_messages() == []
+    assert np.linalg.norm(tcp_pose(arm)[:3, 3] - start) > 0.001  # it moves
 
 
 def test_the_robot_log_keeps_only_its_latest_entries(arm):

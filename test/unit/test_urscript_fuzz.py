@@ -25,9 +25,9 @@ import traceback
 
 import numpy as np
 import pytest
-import rospkg
 
 from ur3_ft_gripper_description.devices.ur_arm import core as arm_core
+from ur3_ft_gripper_description.model.names import shared_rospack
 from ur3_ft_gripper_description.devices.ur_arm import joints as jm
 from ur3_ft_gripper_description.devices.ur_arm import robot_state as rs
 from ur3_ft_gripper_description.devices.ur_arm.settings import read_settings
@@ -47,12 +47,17 @@ COMPILE_ERROR = re.compile(r'script_command: the robot would not compile this sc
 RUNTIME_EXCEPTION = re.compile(r'script_command: (RuntimeException: Runtime error in line (\d+), column \d+ '
                                r'Error: \S.*); program stopped$')
 REFUSED, RUNTIME_ERROR, RAN = 'refused', 'runtime error', 'ran'
+# Python's own exception texts: the robot's runtime error names URScript's types (int, float, list, pose),
+# never a Python class or phrase.
+PYTHON_WORDING = re.compile(r"between instances of|unsupported operand|object is not|NoneType|object has no "
+                            r"attribute|positional argument|invalid literal|must be real number|'(list|int|float|"
+                            r"str|tuple|dict|Pose)'")
 
 
 # -- the arm's core, as the node builds it --------------------------------------------------------
 
 def make_core(configured_model, ur_type):
-    config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config', '%s_controllers.yaml' % ur_type)
+    config = os.path.join(shared_rospack().get_path('ur_robot_driver'), 'config', '%s_controllers.yaml' % ur_type)
     values = {'~ur_type': ur_type, '~controller_config_file': config, '~controllers': STARTED,
               'robot_description': configured_model(ur_type, False, False).text}
     settings = read_settings(lambda name, default=None: values.get(name, default))
@@ -117,6 +122,8 @@ def run_mutant(core, dt, text, cycles):
     exception = RUNTIME_EXCEPTION.match(errors[0][1])
     if len(errors) != 1 or exception is None:
         raise Misbehaviour('other than one runtime exception: %r' % errors)
+    if PYTHON_WORDING.search(exception.group(1)):
+        raise Misbehaviour('the runtime exception speaks Python, not URScript: %r' % exception.group(1))
     if exception.group(1) not in core.robot.log:
         raise Misbehaviour('the runtime exception is not in the robot log: %r' % exception.group(1))
     # Line 0: a motion that fails while it runs, between the program's instructions.

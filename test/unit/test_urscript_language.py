@@ -339,6 +339,14 @@ def test_a_robot_refusal_is_a_runtime_error_on_the_calls_line():
     assert (run.error.line, run.error.text) == (2, 'movej: joint 2 out of range')
 
 
+def test_a_call_python_cannot_compute_is_a_type_error_in_urscripts_words_naming_the_types_given():
+    class Robot(CellRobot):
+        def call(self, name, args, kwargs):
+            return args[0] > 0  # a robot function comparing what it was given, as Python would
+    run, _, _ = run_to_end('x = 1\nmovej("fast")\n', Robot())
+    assert (run.error.line, run.error.text) == (2, 'Type error: movej cannot take (string)')
+
+
 # --- what PolyScope and the drivers write ---------------------------------------------------
 
 POLYSCOPE = '''$ 1 "Robot Program"

@@ -248,7 +248,10 @@ class Run(object):
                 params = list(defaults)
                 for slot, value in zip(slots, given):
                     params[slot] = value
-                stack.append(fn(*params))
+                try:
+                    stack.append(fn(*params))
+                except PYTHON_VALUE_ERRORS as exc:
+                    raise _call_fault(name, given, exc)
             elif op == C.UNARY:
                 value = stack.pop()
                 if arg == 'neg':
@@ -329,8 +332,10 @@ class Run(object):
                 named = dict((k, values.copy(v)) for k, v in zip(kwnames, given[npositional:]))
                 try:
                     result = self.robot.call(name, positional, named)
-                except ValueError as exc:
+                except ValueError as exc:  # the robot refuses a call with its own words
                     raise _as_fault(exc)
+                except (ArithmeticError, TypeError) as exc:
+                    raise _call_fault(name, given, exc)
                 if isinstance(result, Blocking):
                     thread.wait = ('blocking', result)
                     thread.spent = True
@@ -408,6 +413,20 @@ def _take(stack, n):
     items = stack[-n:]
     del stack[-n:]
     return items
+
+
+def _call_fault(name, arguments, exc):
+    """The runtime error of a call whose function could not compute with its arguments: in URScript's words.
+
+    Python's own text names its classes and operators ("'>' not supported between instances of 'str' and
+    'int'"), which no robot says; what the program needs to know is the function and the types it gave.
+    Python's built-in exceptions only: the package's own (a motion's, a register's) already say it."""
+    if type(exc).__module__ != 'builtins':
+        return _as_fault(exc)
+    types = ', '.join(values.type_name(v) for v in arguments)
+    if isinstance(exc, TypeError):
+        return RuntimeFault('Type error: %s cannot take (%s)' % (name, types))
+    return RuntimeFault('%s cannot compute with these arguments (%s)' % (name, types))
 
 
 def _as_fault(exc):

@@ -15,13 +15,14 @@ taken) ends it with one line naming the problem and the fix.
 """
 
 import argparse
+import ipaddress
 import os
 import signal
 import sys
 import threading
 import time
 
-from ..network import listen
+from ..network import external_control_urcap, listen
 
 PERIOD = {'CB3': 0.008, 'e-Series': 0.002}
 # No ROS parameters: the controller takes its command line (--ur-type, --robot-ip, --kinematics-params),
@@ -36,13 +37,15 @@ class ControllerError(RuntimeError):
     """A controller that cannot start: one line naming the problem and the fix."""
 
 
-def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None, script_socket_hosts=''):
+def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None, script_socket_hosts='',
+          external_control=None):
     """(core, faces, lock) of `ur_type`, its faces listening on `robot_ip` (not yet serving); `ports`:
     {face: port} for those not on the robot's own (network_faces.PORTS; 0: a free one); `script_socket_hosts`:
-    where programs' sockets may reach beyond loopback (settings.socket_hosts)."""
-    import rospkg
+    where programs' sockets may reach beyond loopback (settings.socket_hosts); `external_control`: (host,
+    port) of the driver's script sender, which the External Control URCap asks for the program when
+    external_control.urp plays (None: the simulation stands in for the driver's program)."""
     from ...model import description, export
-    from ...model.names import DescriptionError
+    from ...model.names import DescriptionError, shared_rospack
     from .. import sim_params
     from . import core as arm_core
     from . import joints, software
@@ -53,7 +56,7 @@ def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None, script_
         software.for_model(ur_type)
         urdf = description.to_xml(description.expand_model(export.model_mappings(
             ur_type=ur_type, kinematics_params=kinematics_params)))
-        config = os.path.join(rospkg.RosPack().get_path('ur_robot_driver'), 'config',
+        config = os.path.join(shared_rospack().get_path('ur_robot_driver'), 'config',
                               '%s_controllers.yaml' % ur_type)
         values = {'~ur_type': ur_type, '~controller_config_file': config, 'robot_description': urdf,
                   '~controllers': 'joint_state_controller scaled_pos_joint_traj_controller',
@@ -72,7 +75,7 @@ def build(ur_type, robot_ip, kinematics_params='', log=None, ports=None, script_
             return method(*args)
 
     try:
-        faces = NetworkFaces(listen.checked_address(robot_ip), core, call, log or say, ports)
+        faces = NetworkFaces(listen.checked_address(robot_ip), core, call, log or say, ports, external_control)
     except listen.ListenError as error:
         raise ControllerError(str(error)) from None
     return core, faces, lock
@@ -112,6 +115,13 @@ def main(argv=None):
     parser.add_argument('--script-socket-hosts', default='',
                         help='addresses beyond loopback that URScript\'s socket_open may connect to: IPv4 addresses or '
                              'networks (192.168.56.1, 192.168.56.0/24) separated by commas (default: loopback only)')
+    parser.add_argument('--external-control-host-ip', default=listen.LOOPBACK,
+                        help='the External Control URCap\'s Host IP: where the driver\'s script sender runs, which '
+                             'it asks for the program when external_control.urp plays (default: %s)'
+                             % listen.LOOPBACK)
+    parser.add_argument('--external-control-port', type=int, default=external_control_urcap.DEFAULT_PORT,
+                        help='the URCap\'s Custom port: the script sender\'s (default: %d, the driver\'s '
+                             'script_sender_port)' % external_control_urcap.DEFAULT_PORT)
     # roslaunch appends its own name:=value arguments (__name, __log) to any program it starts.
     args = parser.parse_args([a for a in (sys.argv[1:] if argv is None else argv) if ':=' not in a])
     if args.kinematics_params and not os.path.isfile(args.kinematics_params):
@@ -119,8 +129,19 @@ def main(argv=None):
             'output), or leave it out for ur_description\'s default' % args.kinematics_params)
         return 1
     try:
+        ipaddress.IPv4Address(args.external_control_host_ip)
+    except ValueError:
+        say('--external-control-host-ip: %s is not an IPv4 address: give the address of the machine that runs '
+            'ur_robot_driver (its script sender), e.g. 127.0.0.1' % args.external_control_host_ip)
+        return 1
+    if not 0 < args.external_control_port < 65536:
+        say('--external-control-port: %d is not a TCP port: give the driver\'s script_sender_port (50002 by '
+            'default)' % args.external_control_port)
+        return 1
+    try:
         core, faces, lock = build(args.ur_type, args.robot_ip, args.kinematics_params,
-                                  script_socket_hosts=args.script_socket_hosts)
+                                  script_socket_hosts=args.script_socket_hosts,
+                                  external_control=(args.external_control_host_ip, args.external_control_port))
     except ControllerError as error:
         say(str(error))
         return 1

@@ -191,6 +191,7 @@ class ArmCore(object):
         self.twist = np.zeros(6)
         self.twist_follower = cartesian.TwistFollower(self.arm)
         self.socket_hosts = settings.script_socket_hosts  # where a program's sockets may reach beyond loopback
+        self.modbus_port = int(settings.script_modbus_port)  # the port of the units its MODBUS client polls
         self.script_robot = script_robot.ScriptRobot(self)
         self.script_run = None       # urscript.Run of the primary program from script_command
         self.secondary_runs = []     # urscript.Run of the secondary programs running beside it
@@ -237,6 +238,10 @@ class ArmCore(object):
         events = list(self.program_events)
         self.program_events.clear()
         return events
+
+    def say_warning(self, text):
+        """A warning of the robot's, for the node's log (what its MODBUS client found, for one)."""
+        self._say(WARN, text)
 
     def _say(self, level, text):
         self.messages.append((level, text))
@@ -569,6 +574,19 @@ class ArmCore(object):
         self.script_name = program.name or ''
         self.program_events.append((PROGRAM_STARTED, self.script_name))
 
+    def run_external_control(self, program):
+        """external_control.urp played and its URCap fetched `program` (compile_program's answer to the
+        driver's script, or the URCap's popup text as a str): it runs as the loaded program, where without a
+        URCap the simulation stands in for the driver's. Nothing happens if the program stopped meanwhile."""
+        if not self.robot.external_control_running:
+            return
+        if isinstance(program, (str, urscript.CompileError)):
+            text = program if isinstance(program, str) else 'the robot would not compile it: %s' % program
+            self._say(ERROR, 'external_control.urp: %s' % text)
+            self.robot.program_failed(text)
+            return
+        self.start_program(program)
+
     def _step_run(self, run, dt):
         """One cycle of a program; a runtime error is the robot's runtime exception, in its log."""
         run.step(dt)
@@ -675,6 +693,7 @@ class ArmCore(object):
         self.robot.step(dt)
         self._controller_stopper()
         self._secondary_programs(dt)
+        self.script_robot.modbus.cycle(dt)
         command, limit_factor, twisting = self._command(dt)
         if not self.robot.moving_allowed:
             # Stopped, paused or protectively stopped: the controllers ran (their time goes on,

@@ -4,9 +4,9 @@ Which commands a controller answers depends on its generation and software
 version; a line is matched to the longest command its words begin with, in
 any case, and the rest of the line is the command's argument.
 """
-import yaml
 
 from ..sim_params import PackageFile
+from ... import yaml_data
 
 TABLE_FILE = PackageFile('config/ur_dashboard.yaml')
 
@@ -22,6 +22,7 @@ class DashboardCommands(object):
         self.entries = table['commands']
         self.user_roles = tuple(table['user_roles'])
         self.operational_modes = tuple(table['operational_modes'])
+        self.flight_report_types = tuple(table['flight_report_types'])
         self._by_length = sorted(self.entries, key=lambda key: -len(key.split()))
 
     def match(self, line):
@@ -52,5 +53,5 @@ def read(path=None):
     path = path or TABLE_FILE.path()
     if path not in _CACHE:
         with open(path) as stream:
-            _CACHE[path] = DashboardCommands(yaml.safe_load(stream))
+            _CACHE[path] = DashboardCommands(yaml_data.load(stream))
     return _CACHE[path]

@@ -13,7 +13,7 @@ control cycle, holding that lock.
 
 import threading
 
-from ..network import dashboard, listen, primary, realtime, rtde
+from ..network import dashboard, external_control_urcap, listen, primary, realtime, rtde
 from . import rtde_fields
 from .script_robot import STEP_TIME
 
@@ -50,7 +50,10 @@ class CycleCount(object):
 class NetworkFaces(object):
     """The faces of `core` listening on `address` (listen.ListenError, one line, if one cannot)."""
 
-    def __init__(self, address, core, call, log, ports=None):
+    def __init__(self, address, core, call, log, ports=None, external_control=None):
+        """`external_control`: (host, port) of the driver's script sender, which the External Control URCap
+        asks for the program when external_control.urp plays; None: no URCap, the simulation stands in for
+        the driver's program (the ROS bring-up's own driver face)."""
         ports = dict(PORTS, **(ports or {}))
         software = core.software
         generation = software.table_key
@@ -66,8 +69,20 @@ class NetworkFaces(object):
         run = lambda text: call(core.start_program, core.compile_program(text))  # noqa: E731
         self.cycles = CycleCount()
 
+        def ask(command):
+            before = core.robot.external_control_running
+            return core.dashboard(command), self.cycles.count, core.robot.external_control_running and not before
+
         def answer(command):
-            reply, cycle = call(lambda: (core.dashboard(command), self.cycles.count))
+            reply, cycle, external_control_started = call(ask, command)
+            if external_control_started and external_control is not None:
+                # As the URCap on the pendant: the program is fetched when it starts, outside the control
+                # cycle (the controller goes on meanwhile), and runs once fetched.
+                try:
+                    program = core.compile_program(external_control_urcap.request_program(*external_control))
+                except external_control_urcap.RequestError as error:
+                    program = str(error)
+                call(core.run_external_control, program)
             if dashboard.done_before_reply(command):
                 # Done is when the faces have sent the cycle that carries it.
                 self.cycles.wait_past(cycle, DONE_WAIT)

@@ -25,6 +25,7 @@ succeed when the answer matches what it expects.
 
 import collections
 import re
+import time
 
 from . import dashboard_commands
 from .registers import Registers
@@ -114,6 +115,7 @@ class RobotState(object):
         self.dashboard_commands = dashboard_commands.read()
         self.user_role = 'NONE'  # CB3: no user role restriction
         self.operational_mode = None  # e-Series: PolyScope's, not set over the dashboard
+        self.flight_reports = 0
         self._target = None        # robot mode a transition is heading for
         self._timer = 0.0
         self._stopped_for = 0.0    # s since the protective stop
@@ -243,6 +245,13 @@ class RobotState(object):
         self._end_program()
         return True, 'Deactivated control'
 
+    def program_failed(self, text):
+        """The loaded program could not start (the External Control URCap got no script): its popup shows
+        `text`, in the log too, and the program stops."""
+        self.popup = text
+        self.add_log(text)
+        self._end_program()
+
     def script_started(self, secondary):
         """A URScript program arrived: a primary one replaces the running program and plays."""
         if not secondary:
@@ -360,6 +369,22 @@ class RobotState(object):
 
     def _dashboard_polyscopeversion(self, argument):
         return 'URSoftware %s' % self.software.version_text
+
+    def _dashboard_version(self, argument):
+        return self.software.version_text
+
+    def _dashboard_generate_flight_report(self, argument):
+        if argument.lower() not in self.dashboard_commands.flight_report_types:
+            return _NOT_UNDERSTOOD
+        self.flight_reports += 1
+        return 'Flight Report generated with id: %d' % self.flight_reports
+
+    def _dashboard_generate_support_file(self, argument):
+        if not argument:
+            return _NOT_UNDERSTOOD
+        # Named on the robot's clock (UTC here); nothing is written: the simulation has no robot disk.
+        return 'Completed successfully: ur_%s_%s.zip' % (self.software.serial_number,
+                                                         time.strftime('%Y-%m-%d_%H-%M-%S', time.gmtime()))
 
     def _dashboard_load_installation(self, argument):
         return 'Loading installation: %s' % argument if argument else 'File not found: '

@@ -35,11 +35,12 @@ import struct
 import numpy as np
 
 from ...urscript import Blocking, Pose, RuntimeFault
-from ...urscript.values import to_str
+from ...urscript.values import to_str, type_name
 from . import cartesian
 from . import force_mode as fm
 from . import robot_state as rs
 from . import script_sockets as ss
+from .script_modbus import DIGITAL_OUTPUT, REGISTER_OUTPUT, ScriptModbus
 from . import tool_motion as tm
 from .arm_kinematics import rigid_inverse
 from .registers import BOOLEAN, FLOAT, INTEGER, RegisterError
@@ -62,6 +63,10 @@ GRAVITY_ALONG_Z = 1e-3
 # robot detects contact from its joints' currents and UR gives no figure; the twin measures its TCP's wrench
 # (tcp_wrench.py; zero without physics), and 5 N stands clear of its noise at rest.
 TOOL_CONTACT_FORCE = 5.0
+# How near (m, rad) the joints force mode commands put the TCP to its pose. The inverse kinematics'
+# default (10 um) is a dead band the admittance's small steps in a press fall into, and then leap out
+# of: against a table that is a force jumping by 1 to 2 N. Under 1 nm it is under a thousandth of a N.
+FORCE_MODE_REACH, FORCE_MODE_REACH_ITERATIONS = 1e-9, 10
 # rtde_set_watchdog's actions, as the manual names them.
 WATCHDOG_IGNORE, WATCHDOG_PAUSE, WATCHDOG_STOP = 'ignore', 'pause', 'stop'
 # The external F/T sensor's switches (enable_external_ft_sensor, ft_rtde_input_enable): the manual's parameters.
@@ -125,6 +130,24 @@ E_SERIES_INSTALLATION_SETTINGS = {
     # 1: sinking (NPN), 2: sourcing (PNP), 3: push/pull.
     'set_tool_digital_output_mode': {'n': OneOf(0, 1), 'mode': OneOf(1, 2, 3)},
 }
+
+
+def _number(what, value, kind):
+    """`value` as `kind` (int or float) for function `what`; the robot's type error for what is not a number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RuntimeFault('Type error: %s takes a number, not %s' % (what, type_name(value)))
+    if not math.isfinite(value):
+        raise RuntimeFault('%s takes a finite number, not %r' % (what, value))
+    return kind(value)
+
+
+def _integer(what, value):
+    """`value` as an int for function `what`; the robot's type error for what is not a whole number."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise RuntimeFault('Type error: %s takes an int, not %s' % (what, type_name(value)))
+    if not (math.isfinite(value) and value == int(value)):
+        raise RuntimeFault('Type error: %s takes an int, not %s' % (what, to_str(value)))
+    return int(value)
 
 
 class Signature(object):
@@ -245,6 +268,17 @@ def _signatures(e_series, version):
         'rtde_set_watchdog': Signature(now, 'variable_name', 'min_frequency', 'action', action=WATCHDOG_PAUSE),
         'enable_external_ft_sensor': Signature(now, *EXTERNAL_FT, **EXTERNAL_FT_DEFAULTS),
         'zero_ftsensor': Signature(now),
+        'modbus_add_signal': Signature(now, 'IP', 'slave_number', 'signal_address', 'signal_type', 'signal_name',
+                                       'sequential_mode', sequential_mode=False),
+        'modbus_delete_signal': Signature(now, 'signal_name'),
+        'modbus_set_signal_update_frequency': Signature(now, 'signal_name', 'update_frequency'),
+        # With an update frequency of 0 a read waits for the unit's answer.
+        'modbus_get_signal_status': Signature(move, 'signal_name', 'is_secondary_program',
+                                              is_secondary_program=False),
+        'modbus_set_output_register': Signature(now, 'signal_name', 'register_value', 'is_secondary_program',
+                                                is_secondary_program=False),
+        'modbus_set_output_signal': Signature(now, 'signal_name', 'digital_value', 'is_secondary_program',
+                                              is_secondary_program=False),
         'freedrive_mode': Signature(now),
         'end_freedrive_mode': Signature(now),
         'teach_mode': Signature(now),
@@ -305,7 +339,12 @@ class ScriptRobot(object):
         self.force_offset = np.eye(4)  # force mode's displacement of the TCP (base axes, about the TCP)
         self.commanded = None         # the joints commanded last cycle
         self.commanded_speed = np.zeros(6)
+        # The program's own joint speed: the commanded speed without force mode's displacement, which a
+        # new motion or a stop starts from (the displacement stays apart).
+        self.planned_speed = np.zeros(6)
         self.sockets = ss.ScriptSockets(lambda: core.uptime, core.socket_hosts)
+        self.modbus = ScriptModbus(lambda function, ip: self.sockets.check_reach(ip, function),
+                                   core.say_warning, core.modbus_port)
         self.watchdogs = {}           # rtde_set_watchdog's: {variable: (period s, action, set at uptime)}
 
     def served(self):
@@ -322,6 +361,7 @@ class ScriptRobot(object):
         self.commanded = self.core.actual_state()[0]
         self.planned = self.commanded.copy()
         self.commanded_speed = np.zeros(6)
+        self.planned_speed = np.zeros(6)
 
     @property
     def moving(self):
@@ -335,39 +375,46 @@ class ScriptRobot(object):
         self.watchdogs = {}  # the manual: all watchdogs are removed on program stop
         if self.moving and isinstance(self.motion, (tm.ToolSpeed, tm.JointSpeed)) and \
                 not isinstance(self.motion, (tm.ToolStop, tm.JointStop)):
-            self.motion = tm.JointStop(self.core.arm, self.planned, self.commanded_speed,
+            self.motion = tm.JointStop(self.core.arm, self.planned, self.planned_speed,
                                        END_OF_PROGRAM_DECELERATION, previous=self.motion)
 
     def command(self, dt):
         """The joint positions to command for the end of this cycle of `dt` s (RuntimeFault if the arm cannot)."""
         arm = self.core.arm
+        previous = self.planned
         if self.motion is not None:
             try:
                 self.planned = self.motion.step(dt)
             except tm.MotionError as exc:
                 self.motion = None
                 raise RuntimeFault(str(exc)) from None
+        if dt > 0:
+            self.planned_speed = (self.planned - previous) / dt
         target = self.planned
         if self.force is not None or not np.allclose(self.force_offset, np.eye(4)):
             tcp = self.core.tcp
             planned = tm.tcp_pose(arm, tcp, self.planned)
+            motion = self.core.motion
+            # Joint servos that give (force_mode.py): the admittance runs against their damping, and what it
+            # asks beyond where its motion takes the TCP pulls along the compliant axes only.
+            giving = self.force is not None and motion.stiffness is not None
+            if giving:
+                actual = self.core.actual_state()[0]
+                jacobian = arm.jacobian(actual, tcp)
             if self.force is not None:
                 external = self.core.tcp_force()[0]
-                linear, angular = self.force.step(dt, self.force_offset[:3, 3] + planned[:3, 3], external)
+                damping = fm.servos_at_tcp(jacobian, motion.servo_damping) if giving else None
+                linear, angular = self.force.step(dt, self.force_offset[:3, 3] + planned[:3, 3], external, damping)
                 self.force_offset = fm.displaced(self.force_offset, linear, angular)
             pose = self._displaced_pose(planned)
-            stiffness = self.core.motion.stiffness
-            if self.force is None or stiffness is None:
+            if not giving:
                 target = self._reach(pose)
             else:
-                # Joint servos that give: what the admittance asks beyond where its motion takes the TCP
-                # pulls along the compliant axes only (force_mode.py).
-                actual = self.core.actual_state()[0]
                 frame = self.force.frame
                 travel = self.force.velocity * dt
                 going = fm.displaced(tm.tcp_pose(arm, tcp, actual), frame.dot(travel[:3]), frame.dot(travel[3:]))
                 ahead = fm.lead(frame, self.force.selection, pose, going)
-                shift = fm.uncoupled(arm.jacobian(actual, tcp), stiffness, frame, self.force.selection, ahead)
+                shift = fm.uncoupled(jacobian, motion.stiffness, frame, self.force.selection, ahead)
                 target = self._reach(fm.displaced(pose, *shift))
         if dt > 0:
             self.commanded_speed = (target - self.commanded) / dt
@@ -396,7 +443,11 @@ class ScriptRobot(object):
 
     def _reach(self, pose):
         """Joint positions putting the TCP at `pose`, from the last command."""
-        target = self.core.arm.inverse(pose.dot(rigid_inverse(self.core.tcp)), self.commanded)
+        flange = pose.dot(rigid_inverse(self.core.tcp))
+        target = self.core.arm.inverse(flange, self.commanded, FORCE_MODE_REACH, FORCE_MODE_REACH_ITERATIONS)
+        if target is None:
+            # Near a singularity the last nanometres do not converge: there the default reach.
+            target = self.core.arm.inverse(flange, self.commanded)
         if target is None:
             raise RuntimeFault('force_mode: the pose it asks for is out of the arm\'s reach')
         return target
@@ -431,7 +482,7 @@ class ScriptRobot(object):
                 # A move or a stop ended at rest: its last cycle's mean speed is not the arm's speed (a
                 # speedl after a movej would start with it, and turn the tool it was told not to turn).
                 return self.planned, np.zeros(6)
-        return self.planned, self.commanded_speed
+        return self.planned, self.planned_speed
 
     def _motion(self, build):
         try:
@@ -715,26 +766,28 @@ class ScriptRobot(object):
             raise RuntimeFault('%s: %s' % (what, message))
 
     def _set_standard_digital_out(self, n, b):
-        self._io('set_standard_digital_out', 1, int(n), 1.0 if b else 0.0)
+        self._io('set_standard_digital_out', 1, _number('set_standard_digital_out', n, int), 1.0 if b else 0.0)
 
     _set_digital_out = _set_standard_digital_out
 
     def _set_configurable_digital_out(self, n, b):
-        self._io('set_configurable_digital_out', 1, int(n) + CONFIGURABLE_OFFSET, 1.0 if b else 0.0)
+        self._io('set_configurable_digital_out', 1, _number('set_configurable_digital_out', n, int) + CONFIGURABLE_OFFSET,
+                 1.0 if b else 0.0)
 
     def _set_tool_digital_out(self, n, b):
-        self._io('set_tool_digital_out', 1, int(n) + TOOL_OFFSET, 1.0 if b else 0.0)
+        self._io('set_tool_digital_out', 1, _number('set_tool_digital_out', n, int) + TOOL_OFFSET, 1.0 if b else 0.0)
 
     def _set_standard_analog_out(self, n, f):
-        self._io('set_standard_analog_out', 3, int(n), float(f))
+        self._io('set_standard_analog_out', 3, _number('set_standard_analog_out', n, int),
+                 _number('set_standard_analog_out', f, float))
 
     _set_analog_out = _set_standard_analog_out
 
     def _set_tool_voltage(self, voltage):
-        self._io('set_tool_voltage', 4, 0, float(voltage))
+        self._io('set_tool_voltage', 4, 0, _number('set_tool_voltage', voltage, float))
 
     def _pin(self, values, n, offset, count, what):
-        n = int(n)
+        n = _number(what, n, int)
         if not 0 <= n < count:
             raise RuntimeFault('%s: pin %d does not exist (0 to %d)' % (what, n, count - 1))
         return values[n + offset]
@@ -780,6 +833,40 @@ class ScriptRobot(object):
             raise RuntimeFault('%s: %s' % (name, error)) from None
 
     # sockets (script_sockets.py): the robot is the client
+
+    # The MODBUS client (script_modbus.py)
+
+    def _modbus_add_signal(self, IP, slave_number, signal_address, signal_type, signal_name, sequential_mode):
+        function = 'modbus_add_signal'
+        self.modbus.add_signal(_text(IP, function + ': IP'), _integer(function, slave_number),
+                               _integer(function, signal_address), _integer(function, signal_type),
+                               _text(signal_name, function + ': signal_name'))
+
+    def _modbus_delete_signal(self, signal_name):
+        self.modbus.delete_signal(_text(signal_name, 'modbus_delete_signal: signal_name'))
+
+    def _modbus_set_signal_update_frequency(self, signal_name, update_frequency):
+        function = 'modbus_set_signal_update_frequency'
+        self.modbus.set_update_frequency(_text(signal_name, function + ': signal_name'),
+                                         _number(function, update_frequency, float))
+
+    def _modbus_get_signal_status(self, signal_name, is_secondary_program):
+        return self.modbus.get_status(_text(signal_name, 'modbus_get_signal_status: signal_name'))
+
+    def _modbus_set_output_register(self, signal_name, register_value, is_secondary_program):
+        function = 'modbus_set_output_register'
+        value = _integer(function, register_value)
+        if not 0 <= value <= 65535:
+            raise RuntimeFault('%s: %d is not a register value (an unsigned 16-bit integer, 0 to 65535)'
+                               % (function, value))
+        self.modbus.set_output(function, _text(signal_name, function + ': signal_name'), value, REGISTER_OUTPUT)
+
+    def _modbus_set_output_signal(self, signal_name, digital_value, is_secondary_program):
+        function = 'modbus_set_output_signal'
+        if not isinstance(digital_value, bool):
+            raise RuntimeFault('Type error: %s takes True or False, not %s' % (function, type_name(digital_value)))
+        self.modbus.set_output(function, _text(signal_name, function + ': signal_name'), digital_value,
+                               DIGITAL_OUTPUT)
 
     def _socket_open(self, address, port, socket_name):
         return self.sockets.open(_text(address, 'socket_open: address'), port, _text(socket_name, 'socket_name'))

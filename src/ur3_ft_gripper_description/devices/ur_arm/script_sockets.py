@@ -58,15 +58,15 @@ class ScriptSockets(object):
         self.allowed = list(allowed)
         self.connections = {}
 
-    def _check_reach(self, address):
-        """RuntimeFault, naming the address, where the program may not connect; else nothing."""
+    def check_reach(self, address, function='socket_open'):
+        """RuntimeFault of `function`, naming the address, where the program may not connect; else nothing."""
         try:
             host = ipaddress.ip_address(socket.gethostbyname(str(address)))
         except (OSError, UnicodeError, ValueError):
             return  # a name that does not resolve fails to connect, as on the robot
         if not host.is_loopback and not any(host in network for network in self.allowed):
-            raise RuntimeFault('socket_open: %s is beyond this machine; the simulated robot connects to loopback '
-                               'and to the addresses you allow it (script_socket_hosts:=%s)' % (address, host))
+            raise RuntimeFault('%s: %s is beyond this machine; the simulated robot connects to loopback '
+                               'and to the addresses you allow it (script_socket_hosts:=%s)' % (function, address, host))
 
     def close_all(self):
         for name in list(self.connections):
@@ -100,7 +100,7 @@ class ScriptSockets(object):
 
     def open(self, address, port, name=DEFAULT_SOCKET):
         """socket_open: True once connected, False if refused or not within OPEN_TIMEOUT."""
-        self._check_reach(address)
+        self.check_reach(address)
         self.close(name)
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         sock.setblocking(False)

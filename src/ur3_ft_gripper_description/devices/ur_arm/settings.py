@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import sim_clock, sim_params
 from ..network import listen
+from ..wrench_model import load_sensor_spec
 from ..physics import arm_cell
 from . import controller_manager as cm
 from . import robot_state as rs
@@ -97,6 +98,10 @@ PARAMETERS = (
     sim_params.Param('~robot_ip', '', "The controller's own network interfaces (the Dashboard Server on 29999, primary and secondary 30001-30002, real-time 30003, RTDE 30004) "
                      'listen on this IPv4 address, e.g. 127.0.0.1, or 127.0.0.2 for a second cell on the machine; '
                      'empty: none', robot_ip),
+    sim_params.Param('~script_modbus_port', 502, "The port of the units URScript's MODBUS client (modbus_add_signal) "
+                     "polls: the robot's is always Modbus TCP's 502; another for a unit that cannot take 502 (a "
+                     'server without root, the simulated gripper\'s gateway at sim_gripper_gateway_port)',
+                     sim_params.number(minimum=1.0)),
     sim_params.Param('~script_socket_hosts', '', "Addresses beyond this machine's loopback that URScript's "
                      'socket_open may connect to: IPv4 addresses or networks (192.168.56.1, 192.168.56.0/24) separated '
                      'by commas; empty: loopback only', socket_hosts),
@@ -156,6 +161,9 @@ def read_settings(get_param):
     # /use_sim_time is ROS's own global parameter (rospy reads it too), not the node's.
     settings.use_sim_time = sim_params.flag('/use_sim_time', get_param('/use_sim_time', False))
     settings.real_time_factor = sim_clock.check_factor(settings.use_sim_time, param('~real_time_factor'))
+    settings.clock_stride = sim_clock.clock_stride(settings.use_sim_time, settings.loop_hz,
+                                                   param('~pub_clock_frequency'),
+                                                   load_sensor_spec(sim_params.SIM_DEVICES_FILE.path()).rate)
     mode = param('~robot_mode')
     settings.robot = rs.RobotState(settings.software, robot_mode=mode, program_running=param('~program_running'),
                                    headless=param('~headless_mode'))
@@ -163,4 +171,8 @@ def read_settings(get_param):
     settings.robot.payload = mounted_payload(description, settings.prefix + FLANGE)
     settings.robot_ip = param('~robot_ip')
     settings.script_socket_hosts = param('~script_socket_hosts')
+    settings.script_modbus_port = param('~script_modbus_port')
+    if settings.script_modbus_port != int(settings.script_modbus_port) or settings.script_modbus_port > 65535:
+        raise sim_params.ParamError('~script_modbus_port=%r: use a TCP port, 1 to 65535'
+                                    % (settings.script_modbus_port,))
     return settings
