@@ -4,8 +4,9 @@
     python3 bench/physics_ros.py [--seconds 20] [--output bench/RESULTS.md]
 
 In the sourced workspace (tools/quickstart shell), with MuJoCo installed. For a CB3 (ur3, 125 Hz) and an
-e-Series (ur5e, 500 Hz), each at real_time_factor 1 and 0 (as fast as the machine allows), each on its own
-rosmaster on a free port, the bring-up with sim:=true physics:=true in the default world, then for
+e-Series (ur5e, 500 Hz), each at real_time_factor 1 and 0 (as fast as the machine allows), and the ur5e
+again with /clock at 100 Hz (pub_clock_frequency:=100, as Gazebo users set theirs; the default is every cycle),
+each on its own rosmaster on a free port, the bring-up with sim:=true physics:=true in the default world, then for
 `seconds` of wall-clock time, while the arm runs a trajectory through scaled_pos_joint_traj_controller
 back and forth and the gripper closes and opens through its registers:
 - /clock over the wall clock (the real-time factor achieved, measured here), and the factor the arm's
@@ -89,8 +90,8 @@ def cell_alone(ur_type, seconds):
 
 
 def bench(case, seconds, rospy):
-    """`case`: 'UR_TYPE:FACTOR'."""
-    ur_type, factor = case.split(':')
+    """`case`: 'UR_TYPE:FACTOR' or 'UR_TYPE:FACTOR:PUB_CLOCK_FREQUENCY'."""
+    ur_type, factor, clock_hz = (case.split(':') + ['0'])[:3]
     alone = cell_alone(ur_type, 20.0)
     import actionlib
     from control_msgs.msg import FollowJointTrajectoryAction, FollowJointTrajectoryGoal
@@ -103,6 +104,7 @@ def bench(case, seconds, rospy):
 
     launch = benchlib.roslaunch('ur3_ft_gripper_description', 'ur_ft_gripper_bringup.launch', 'sim:=true',
                                 'physics:=true', 'ur_type:=%s' % ur_type, 'real_time_factor:=%s' % factor,
+                                'pub_clock_frequency:=%s' % clock_hz,
                                 log=os.environ.get('BENCH_LOG'))
     try:
         streams = {'joint_states': Arrivals(True), 'robotiq_ft_wrench': Arrivals(True),
@@ -153,7 +155,7 @@ def bench(case, seconds, rospy):
         window = [f for t, f in factors if start <= t <= end]
         ticks = [c for t, c in clock if start <= t <= end]
         simulated = ticks[-1] - ticks[0]
-        return dict(ur_type=ur_type, factor=float(factor), loop_hz=rospy.get_param('/hardware_control_loop/loop_hz'),
+        return dict(ur_type=ur_type, factor=float(factor), clock_hz=float(clock_hz), loop_hz=rospy.get_param('/hardware_control_loop/loop_hz'),
                     moves=moves, seconds=end - start, clock_factor=simulated / (end - start),
                     streams={k: s.window(start, end, simulated) for k, s in streams.items()},
                     rtf_mean=sum(window) / len(window) if window else float('nan'),
@@ -178,28 +180,34 @@ def table(results):
              'trajectory back and forth through scaled_pos_joint_traj_controller and the gripper closing and '
              'opening at rSP 128 all along. Rates are per simulated second; gaps between stamps in simulated ms.'
              % (benchlib.machine(), benchlib.load_average()), '',
-             '| ur_type | real_time_factor | /clock over wall clock | the cell alone (CPU) | share | reported mean / '
-             'lowest | topic | per simulated s | largest stamp gap (ms) |',
-             '| --- | --- | --- | --- | --- | --- | --- | --- | --- |']
+             '| ur_type | real_time_factor | /clock (Hz simulated) | /clock over wall clock | the cell alone (CPU) | '
+             'share | reported mean / lowest | topic | per simulated s | largest stamp gap (ms) |',
+             '| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |']
     for r in results:
         for k, (topic, s) in enumerate(sorted(r['streams'].items())):
-            head = ('| %s | %g | %.2f | %.1f | %.2f | %.2f / %.2f ' % (
-                r['ur_type'], r['factor'], r['clock_factor'], r['alone'], r['clock_factor'] / r['alone'],
-                r['rtf_mean'], r['rtf_min']) if k == 0 else '| | | | | | ')
+            head = ('| %s | %g | %s | %.2f | %.1f | %.2f | %.2f / %.2f ' % (
+                r['ur_type'], r['factor'], _clock_rate(r), r['clock_factor'], r['alone'],
+                r['clock_factor'] / r['alone'], r['rtf_mean'], r['rtf_min']) if k == 0 else '| | | | | | | ')
             lines.append(head + '| %s | %.1f | %.1f |' % (topic, s['hz'], s['max_gap']))
-    lines += ['', '| ur_type | real_time_factor | measured (wall s) | trajectories | CPU (% of one core): '
+    lines += ['', '| ur_type | real_time_factor | /clock (Hz simulated) | measured (wall s) | trajectories | '
+              'CPU (% of one core): '
               'ur_hardware_interface (arm + cell) | its CPU per control cycle (us) | robotiq_ft_sensor | '
-              'robotiq2FGripper |', '| --- | --- | --- | --- | --- | --- | --- | --- |']
+              'robotiq2FGripper |', '| --- | --- | --- | --- | --- | --- | --- | --- | --- |']
     for r in results:
-        lines.append('| %s | %g | %.0f | %d | %.0f | %.0f | %.0f | %.0f |' % (
-            r['ur_type'], r['factor'], r['seconds'], r['moves'], r['cpu']['/ur_hardware_interface'],
+        lines.append('| %s | %g | %s | %.0f | %d | %.0f | %.0f | %.0f | %.0f |' % (
+            r['ur_type'], r['factor'], _clock_rate(r), r['seconds'], r['moves'], r['cpu']['/ur_hardware_interface'],
             r['cycle_us'], r['cpu']['/robotiq_ft_sensor'], r['cpu']['/robotiq2FGripper']))
     return '\n'.join(lines) + '\n'
 
 
+def _clock_rate(result):
+    """/clock's rate: every control cycle (the default), or pub_clock_frequency's."""
+    return '%g (every cycle)' % result['loop_hz'] if not result['clock_hz'] else '%g' % result['clock_hz']
+
+
 def main(argv=None):
     return benchlib.main_per_ur_type(argv, __doc__, __file__, 'physics_ros', bench, table, 20.0,
-                                     cases=('ur3:1', 'ur3:0', 'ur5e:1', 'ur5e:0'))
+                                     cases=('ur3:1', 'ur3:0', 'ur5e:1', 'ur5e:0', 'ur5e:1:100', 'ur5e:0:100'))
 
 
 if __name__ == '__main__':

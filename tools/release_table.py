@@ -18,6 +18,7 @@ the table it `extends`, then in common.yaml; the first that has it answers
     consumers, consumers_apt    the consumers venv's PyPI pins, and the apt packages beside it
     consumers_absent {consumer: why}: test/consumers/test_<consumer>.py is not part of the
                      release's suite, for no registry has that consumer for it
+    consumers_cxxflags  compiler flags (CFLAGS and CXXFLAGS) for the consumers pip builds from source
     message_packages, ros_message_packages   generated from upstream's definitions
     repos, ros_repos repos/<name>.repos to clone
     overlays         tools/<folder> of packages that fill the ROS's gaps (tools/debian)
@@ -40,7 +41,8 @@ import yaml
 FOLDER = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'releases')
 KEYS = ('name', 'quickstart', 'os_release', 'ros_setup', 'ros_install', 'apt', 'ros_apt', 'release_apt', 'programs',
         'ros_programs', 'python_modules', 'venv', 'ros_venv', 'physics', 'consumers', 'consumers_apt', 'consumers_absent',
-        'message_packages', 'ros_message_packages', 'repos', 'ros_repos', 'overlays', 'setup_seconds', 'leg', 'extends')
+        'consumers_cxxflags', 'message_packages', 'ros_message_packages', 'repos', 'ros_repos', 'overlays',
+        'setup_seconds', 'leg', 'extends')
 
 
 def load(name):

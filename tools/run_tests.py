@@ -19,6 +19,7 @@ writing any, 2 on bad arguments.
 import argparse
 import os
 import re
+import resource
 import shutil
 import subprocess
 import sys
@@ -113,6 +114,7 @@ def run_jobs(jobs, results, args, stream):
             progress.status(line())
             log.write('\n=== %s\n' % ' '.join(argv))
             log.flush()
+            job_started, used_before = time.time(), cpu_of_children()
             child = subprocess.Popen(argv, stdout=log, stderr=subprocess.STDOUT)
             try:
                 while True:
@@ -127,6 +129,12 @@ def run_jobs(jobs, results, args, stream):
                 child.wait()
                 progress.done()
                 raise
+            # Where the suite's time goes: a job that keeps a CPU busy for its whole time is the one to make
+            # leaner; one that waits (on the wall clock, on another process) shares the machine.
+            log.write('=== %s: %.1f s of CPU over %.1f s\n' % (
+                ' '.join(filter(None, (kind, name))) or ' '.join(argv), cpu_of_children() - used_before,
+                time.time() - job_started))
+            log.flush()
             new = [(path, where) for path, where in existing_results(results)
                    if seen.get(path) != os.stat(path).st_mtime]
             if child.returncode != 0 and not new:
@@ -145,6 +153,12 @@ def run_jobs(jobs, results, args, stream):
         ', %d skipped' % len(counted.skipped) if counted.skipped else '', clock(time.time() - started)))
     progress.done()
     return status
+
+
+def cpu_of_children():
+    """CPU seconds (user and system) of every process this one has waited for, and of theirs."""
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
 
 
 def existing_results(results):

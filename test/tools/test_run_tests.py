@@ -119,6 +119,22 @@ def test_failures_counted_before_count_in_failed_so_far(tmp_path):
     assert '[tests] variant 3/3 rostest slow.test: 2 failed so far' in run.stderr, run.stderr
 
 
+def test_the_log_gives_each_jobs_cpu_time_and_its_own_time(tmp_path):
+    result = tmp_path / 'busy.xml'
+    # Half a second of CPU in a grandchild (make runs the targets so), then the result.
+    command = ('import subprocess, sys, time; subprocess.run([sys.executable, "-c", "import time\\n'
+               'end = time.process_time() + 0.5\\nwhile time.process_time() < end: pass"]); '
+               'time.sleep(0.5); open(sys.argv[1], "w").write(%r)' % PASSING)
+    run = subprocess.run([sys.executable, RUN_TESTS, 'command', '--label', 'busy', '--log', str(tmp_path / 'b.log'),
+                          '--results', str(result), '--', sys.executable, '-c', command, str(result)],
+                         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         universal_newlines=True, timeout=60)
+    assert run.returncode == 0, run.stderr
+    cpu, wall = map(float, re.search(r'^=== .*: ([\d.]+) s of CPU over ([\d.]+) s$',
+                                     (tmp_path / 'b.log').read_text(), re.MULTILINE).groups())
+    assert 0.5 <= cpu < wall, (cpu, wall)
+
+
 def test_a_command_job_reports_like_a_target(tmp_path):
     result = tmp_path / 'tools.xml'
     command = 'import sys; open(sys.argv[1], "w").write(%r)' % FAILING

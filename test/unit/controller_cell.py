@@ -1,11 +1,14 @@
 """The simulated controller's core with its network faces on free loopback ports, without ROS, for the
 tests of the faces: stepped as the arm's node steps it, each face seeing every cycle."""
 import threading
+import time
 
 from ur3_ft_gripper_description.devices.network import listen
 from ur3_ft_gripper_description.devices.ur_arm.network_faces import PORTS, NetworkFaces
 from ur3_ft_gripper_testing.rtde_client import RtdeClient
 from test_ur_arm_core import make_core
+
+TAKE_IN = 30.0  # wall s for a face's thread to take a connection or its text in
 
 
 class Cell(object):
@@ -31,6 +34,18 @@ class Cell(object):
             with self.lock:
                 snapshot = self.core.step(self.dt)
                 self.faces.after_cycle(self.dt, snapshot)
+
+    def step_until(self, condition, what, seconds=TAKE_IN):
+        """Step the cell until condition() holds after a cycle, for what the faces' threads take in: within
+        `seconds` of the wall clock. Each cycle also waits its period on the wall clock, so that the
+        controller's clock keeps to the faces' threads: on a busy machine a face's thread may wait long for
+        the interpreter, and a clock running flat out meanwhile would put a client the test is not reading
+        its face's whole queue behind, and the face closes such a client's connection, as the robot does."""
+        deadline = time.monotonic() + seconds
+        while not condition():
+            assert time.monotonic() < deadline, '%s did not happen within %g s' % (what, seconds)
+            self.step()
+            time.sleep(self.dt)
 
     def client(self, protocol=2):
         client = RtdeClient(self.port)

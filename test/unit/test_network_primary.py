@@ -129,15 +129,6 @@ def description_hash(ur_type):
         return yaml.safe_load(stream)['kinematics']['hash']
 
 
-def taken_in(cell, condition, seconds=30.0):
-    """Step the cell until condition() holds: the faces' threads take text in while it steps, and the
-    wall clock bounds only that."""
-    deadline = time.monotonic() + seconds
-    while not condition():
-        assert time.monotonic() < deadline, 'not taken in within %g s' % seconds
-        cell.step()
-
-
 @pytest.fixture(params=['ur5e', 'ur3'])
 def cell(request, configured_model):
     cell = Cell(configured_model, request.param)
@@ -189,9 +180,9 @@ def test_the_primary_interface_takes_its_commands_and_the_secondary_a_program(ce
     secondary.package()
     # A program first: the robot runs programs only while RUNNING.
     secondary.send('sec outputs():\n  set_standard_digital_out(4, True)\nend\n')
-    taken_in(cell, lambda: cell.core.robot.digital_out[4])
+    cell.step_until(lambda: cell.core.robot.digital_out[4], 'the secondary\'s program setting output 4')
     primary.send('power off\n')
-    taken_in(cell, lambda: cell.core.robot.robot_mode == 'POWER_OFF')
+    cell.step_until(lambda: cell.core.robot.robot_mode == 'POWER_OFF', 'power off from the primary interface')
     subs, _ = secondary.newest_state(cell)
     assert robot_mode(subs) == (False, POWER_OFF)
     assert struct.unpack_from('>i', subs[MASTERBOARD_DATA], 4)[0] == 1 << 4
@@ -206,7 +197,7 @@ def test_the_read_only_twins_send_the_same_and_take_nothing_in(cell):
         assert client.package()[0] == ROBOT_MESSAGE  # the version message
     read_only.send('power off\n')
     secondary_read_only.send('sec lit():\n  set_standard_digital_out(5, True)\nend\n')
-    taken_in(cell, lambda: len(cell.logged) == 2)
+    cell.step_until(lambda: len(cell.logged) == 2, 'a line from each read-only face')
     subs, _ = read_only.newest_state(cell)
     assert robot_mode(subs) == (True, RUNNING) and not cell.core.robot.digital_out[5]
     assert sorted(line.split(':')[0] for line in cell.logged) == ['primary interface (read-only)',
@@ -223,7 +214,7 @@ def test_a_program_is_parsed_before_the_face_takes_the_cores_lock(cell):
     primary = PrimaryClient(cell.faces.port('primary'))
     primary.package()
     primary.send('def lit():\n  set_standard_digital_out(3, True)\nend\n')
-    taken_in(cell, lambda: cell.core.robot.digital_out[3])
+    cell.step_until(lambda: cell.core.robot.digital_out[3], 'the program setting output 3')
     with cell.lock:
         calls = list(cell.calls)
     started = [args for name, args in calls if name == 'start_program']

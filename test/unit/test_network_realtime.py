@@ -16,7 +16,7 @@ import pytest
 from ur3_ft_gripper_description.devices.network.realtime import Layout
 from ur3_ft_gripper_description.devices.network.script_text import ScriptError, ScriptReader
 from ur3_ft_gripper_description.number_text import number_list
-from controller_cell import Cell
+from controller_cell import TAKE_IN, Cell
 
 TARGET = [0.3, -1.4, 1.3, -1.5, -1.5, 0.4]
 # UR's document: the package's length by software version.
@@ -25,7 +25,6 @@ PACKAGE_BYTES = {('cb3', (3, 5, 0)): 1108, ('cb3', (3, 14, 3)): 1220, ('e_series
 OFFSET = {'time': 4, 'q_actual': 252, 'tool_vector_actual': 444, 'robot_mode': 756, 'digital_outputs': 1044,
           'program_state': 1052}
 RUNNING, PROGRAM_PLAYING, PROGRAM_STOPPED = 7, 2, 1
-TAKE_IN = 30.0  # wall s for a face's thread to take a connection or its text in
 
 
 class RealtimeClient(object):
@@ -56,15 +55,11 @@ class RealtimeClient(object):
         self.socket.close()
 
 
-def step_until(cell, condition, what, seconds=None):
-    """Step the cell until condition() holds after a cycle: within `seconds` of the controller's time, or
-    (None) within TAKE_IN s of the wall clock, for what a face's thread takes in."""
-    cycles, deadline = 0, time.monotonic() + TAKE_IN
+def run_for(cell, condition, what, seconds):
+    """Step the cell until condition() holds after a cycle, within `seconds` of the controller's time."""
+    cycles = 0
     while not condition():
-        if seconds is None:
-            assert time.monotonic() < deadline, '%s did not happen within %g s' % (what, TAKE_IN)
-        else:
-            assert cycles * cell.dt < seconds, '%s did not happen within %g s' % (what, seconds)
+        assert cycles * cell.dt < seconds, '%s did not happen within %g s' % (what, seconds)
         cell.step()
         cycles += 1
 
@@ -101,8 +96,8 @@ def test_a_program_sent_as_text_moves_the_arm_the_package_reads(cell):
     client.taken_in(cell)
     client.send('def p():\n  movej([%s], a=3, v=2)\n' % number_list(TARGET))
     client.send('end\n')  # a program may come in pieces
-    step_until(cell, lambda: cell.core.script_running, 'the program to start')
-    step_until(cell, lambda: not cell.core.script_running, 'the program to end', seconds=10.0)
+    cell.step_until(lambda: cell.core.script_running, 'the program to start')
+    run_for(cell, lambda: not cell.core.script_running, 'the program to end', 10.0)
     data = None
     while True:  # the newest package
         data = client.package()
@@ -120,7 +115,7 @@ def test_a_line_is_a_program_of_its_own(cell):
     client = RealtimeClient(cell.port)
     client.taken_in(cell)
     client.send('set_standard_digital_out(2, True)\n')
-    step_until(cell, lambda: cell.core.robot.digital_out[2], 'digital output 2 on')
+    cell.step_until(lambda: cell.core.robot.digital_out[2], 'digital output 2 on')
     while True:
         data = client.package()
         if doubles(data, 'time') == pytest.approx(cell.core.uptime, abs=1e-9):
@@ -148,7 +143,7 @@ def test_the_read_only_twin_sends_the_same_package_and_runs_nothing(cell):
     package = read_only.taken_in(cell)
     assert len(package) == struct.unpack('>i', package[:4])[0] == len(RealtimeClient(cell.port).taken_in(cell))
     read_only.send('set_standard_digital_out(6, True)\n')
-    step_until(cell, lambda: cell.logged, 'the face\'s line on the text it was sent')
+    cell.step_until(lambda: cell.logged, 'the face\'s line on the text it was sent')
     cell.step(10)
     assert not cell.core.robot.digital_out[6]
     assert len(cell.logged) == 1 and 'read-only' in cell.logged[0] and 'port 30003' in cell.logged[0]
