@@ -23,6 +23,8 @@ the table it `extends`, then in common.yaml; the first that has it answers
     repos, ros_repos repos/<name>.repos to clone
     overlays         tools/<folder> of packages that fill the ROS's gaps (tools/debian)
     setup_seconds    {step: seconds} each set-up step takes, for the time left it announces
+    cell_tests_variant  the robotiq variant whose pass of `quickstart test` runs the cell's targets
+                     (test/variant_scope.yaml); the other variants' passes leave them out
     leg              {python, pins, build_pins, pip_options}: the release's Python leg
 
     release_table.py TABLE KEY       the value: a list one item a line, a mapping
@@ -42,7 +44,7 @@ FOLDER = os.path.join(os.path.dirname(os.path.abspath(__file__)), 'releases')
 KEYS = ('name', 'quickstart', 'os_release', 'ros_setup', 'ros_install', 'apt', 'ros_apt', 'release_apt', 'programs',
         'ros_programs', 'python_modules', 'venv', 'ros_venv', 'physics', 'consumers', 'consumers_apt', 'consumers_absent',
         'consumers_cxxflags', 'message_packages', 'ros_message_packages', 'repos', 'ros_repos', 'overlays',
-        'setup_seconds', 'leg', 'extends')
+        'setup_seconds', 'cell_tests_variant', 'leg', 'extends')
 
 
 def load(name):

@@ -9,7 +9,8 @@ a pipe) one plain line per test file. The output of the tests goes to --log.
 Failures are counted by tools/test_summary.py's Tally, as in the closing line.
 
     run_tests.py catkin --build WS/build --package ur3_ft_gripper_description --label robotiq-noetic \
-        --log run_tests.log [--counted RESULTS_SO_FAR] [--started EPOCH_SECONDS]
+        --log run_tests.log [--counted RESULTS_SO_FAR] [--started EPOCH_SECONDS] \
+        [--cell-tests-elsewhere test/variant_scope.yaml]
     run_tests.py command --results tools.xml --label test/tools --log tools.log -- python3 -m pytest ...
 
 Exit status 0 when every job ran and wrote results (whatever the tests'
@@ -24,6 +25,8 @@ import shutil
 import subprocess
 import sys
 import time
+
+import yaml
 
 import test_summary
 
@@ -55,6 +58,14 @@ def short_name(target, package):
                 name = name.rsplit('_rostest_', 1)[-1] if '_rostest_' in name else name
             return kind, name
     return '', rest
+
+
+def cell_targets(scope_file):
+    """{(kind, name)} of the cell's targets that test/variant_scope.yaml names: they run in one
+    robotiq variant's pass per machine, so the other passes leave them out."""
+    with open(scope_file) as stream:
+        listed = (yaml.safe_load(stream) or {}).get('cell_targets') or {}
+    return {(kind, name) for kind, names in listed.items() for name in names}
 
 
 def clock(seconds):
@@ -174,6 +185,8 @@ def main(argv=None):
     catkin = commands.add_parser('catkin', help="a package's catkin test targets, one at a time")
     catkin.add_argument('--build', required=True, help='the catkin build folder')
     catkin.add_argument('--package', required=True)
+    catkin.add_argument('--cell-tests-elsewhere', metavar='SCOPE_FILE',
+                        help="leave out the cell's targets SCOPE_FILE names: another variant's pass runs them")
     command = commands.add_parser('command', help='one command that writes JUnit results')
     command.add_argument('--results', required=True, help='the result file, or the folder, it writes')
     command.add_argument('argv', nargs=argparse.REMAINDER, help='-- the command and its arguments')
@@ -193,6 +206,15 @@ def main(argv=None):
             parser.exit(2, 'run_tests: %s has no run_tests_%s_* targets: was it configured with '
                            '-DCATKIN_ENABLE_TESTING=ON?\n' % (args.build, args.package))
         jobs = [short_name(t, args.package) + (['make', '-C', args.build, '-j1', t],) for t in targets]
+        if args.cell_tests_elsewhere:
+            elsewhere = cell_targets(args.cell_tests_elsewhere)
+            unknown = sorted('%s/%s' % pair for pair in elsewhere - {job[:2] for job in jobs})
+            if unknown:
+                parser.exit(2, 'run_tests: %s names targets %s has not: %s (rename them there too)\n'
+                            % (args.cell_tests_elsewhere, args.build, ', '.join(unknown)))
+            jobs = [job for job in jobs if job[:2] not in elsewhere]
+            sys.stderr.write('[tests] %s: the cell\'s %d targets run in another variant\'s pass (%s)\n'
+                             % (args.label, len(elsewhere), os.path.basename(args.cell_tests_elsewhere)))
         results = os.path.join(args.build, 'test_results', args.package)
     elif args.command == 'command':
         argv = args.argv[1:] if args.argv[:1] == ['--'] else args.argv

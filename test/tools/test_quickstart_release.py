@@ -6,6 +6,7 @@ installs or builds anything. The tables themselves are read through
 tools/release_table.py, as the quickstart reads them.
 """
 import os
+import re
 import subprocess
 
 import pytest
@@ -115,3 +116,27 @@ def test_an_unknown_table_or_key_is_one_line():
                              stderr=subprocess.PIPE, universal_newlines=True)
         assert run.returncode == 2
         assert run.stderr.count('\n') == 1 and run.stderr.startswith('release_table: '), run.stderr
+
+
+def test_ci_s_two_roots_run_the_cells_targets_under_both_robotiq_variants():
+    # .ci/run's fresh roots: Debian 12 and Debian 13. test/variant_scope.yaml's targets run in one variant's
+    # pass per machine, so the two tables must name different variants, between them every variant.
+    with open(os.path.join(PKG_DIR, 'tools', 'quickstart')) as stream:
+        variants = re.search(r'^ROBOTIQ_VARIANTS=\(([^)]*)\)', stream.read(), re.MULTILINE).group(1).split()
+    assert sorted(table('debian-12', 'cell_tests_variant') + table('debian-13', 'cell_tests_variant')) == \
+        sorted(variants)
+
+
+def test_the_scope_file_names_only_targets_cmake_defines():
+    with open(os.path.join(PKG_DIR, 'test', 'variant_scope.yaml')) as stream:
+        listed = yaml.safe_load(stream)['cell_targets']
+    with open(os.path.join(PKG_DIR, 'CMakeLists.txt')) as stream:
+        cmake = stream.read()
+    rostests = set(re.findall(r'add_rostest\(test/rostest/(\S+?)\)', cmake))
+    pytests = set(re.findall(r'catkin_run_tests_target\(pytest (\S+) ', cmake))
+    assert set(listed) == {'rostest', 'pytest'}
+    assert set(listed['rostest']) <= rostests, set(listed['rostest']) - rostests
+    assert set(listed['pytest']) <= pytests, set(listed['pytest']) - pytests
+    # The model and what reads it stay in every pass.
+    assert not {'model', 'consumers', 'view', 'bringup'} & set(listed['pytest'])
+    assert not {'tf_chain.test', 'export_fk_ur5e.test', 'sim_view.test'} & set(listed['rostest'])

@@ -171,3 +171,34 @@ def test_the_closing_line_is_the_one_ci_reads(tmp_path):
 
 if __name__ == '__main__':
     sys.exit(subprocess.call([sys.executable, '-m', 'pytest', __file__]))
+
+
+def test_the_cell_targets_of_the_scope_file_are_left_out_and_the_rest_run(tmp_path):
+    scope = tmp_path / 'scope.yaml'
+    scope.write_text('cell_targets:\n  rostest: [broken.test]\n')
+    run = subprocess.run(run_tests_args(build_folder(tmp_path), tmp_path, '--plain', '--cell-tests-elsewhere',
+                                        str(scope)),
+                         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         universal_newlines=True, timeout=120)
+    assert run.returncode == 0, run.stderr
+    lines = [re.sub(r', \d+:\d\d$', '', l) for l in run.stderr.splitlines()]
+    assert lines == [
+        "[tests] variant: the cell's 1 targets run in another variant's pass (scope.yaml)",
+        '[tests] variant 1/2 pytest unit: 0 failed so far',
+        '[tests] variant 2/2 rostest slow.test: 0 failed so far',
+        '[tests] variant: 4 passed, 0 failed',
+    ], run.stderr
+    assert 'broken ran' not in (tmp_path / 'tests.log').read_text()
+
+
+def test_a_scope_file_naming_a_target_the_build_has_not_stops_before_any_test_runs(tmp_path):
+    scope = tmp_path / 'scope.yaml'
+    scope.write_text('cell_targets:\n  rostest: [broken.test, renamed.test]\n')
+    run = subprocess.run(run_tests_args(build_folder(tmp_path), tmp_path, '--cell-tests-elsewhere', str(scope)),
+                         stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         universal_newlines=True, timeout=120)
+    assert run.returncode == 2
+    assert run.stderr.strip().splitlines() == [
+        'run_tests: %s names targets %s has not: rostest/renamed.test (rename them there too)'
+        % (scope, tmp_path / 'build')], run.stderr
+    assert not (tmp_path / 'tests.log').exists() or 'ran' not in (tmp_path / 'tests.log').read_text()
