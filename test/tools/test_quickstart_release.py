@@ -127,9 +127,10 @@ def test_ci_s_two_roots_run_the_cells_targets_under_both_robotiq_variants():
         sorted(variants)
 
 
-def test_the_scope_file_names_only_targets_cmake_defines():
+def test_the_scope_file_names_only_targets_cmake_defines_and_files_that_exist():
     with open(os.path.join(PKG_DIR, 'test', 'variant_scope.yaml')) as stream:
-        listed = yaml.safe_load(stream)['cell_targets']
+        scope = yaml.safe_load(stream)
+    listed = scope['cell_targets']
     with open(os.path.join(PKG_DIR, 'CMakeLists.txt')) as stream:
         cmake = stream.read()
     rostests = set(re.findall(r'add_rostest\(test/rostest/(\S+?)\)', cmake))
@@ -140,3 +141,5 @@ def test_the_scope_file_names_only_targets_cmake_defines():
     # The model and what reads it stay in every pass.
     assert not {'model', 'consumers', 'view', 'bringup'} & set(listed['pytest'])
     assert not {'tf_chain.test', 'export_fk_ur5e.test', 'sim_view.test'} & set(listed['rostest'])
+    missing = [name for name in scope['cell_files'] if not os.path.isfile(os.path.join(PKG_DIR, 'test', name))]
+    assert not missing, 'test/variant_scope.yaml names test files that do not exist: %s' % missing

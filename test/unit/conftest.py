@@ -6,6 +6,7 @@ two modules named conftest cannot both be imported.
 import pytest
 
 from ur3_ft_gripper_testing.model import configured, expand
+from ur3_ft_gripper_testing.variant_scope import pytest_collection_modifyitems, pytest_configure  # noqa: F401 (hooks)
 
 
 @pytest.fixture
@@ -22,3 +23,4 @@ def configured_model():
 @pytest.fixture(scope='session')
 def default_model():
     return expand()
+
