@@ -42,8 +42,9 @@ def test_targets(build_dir, package):
                          % (build_dir, run.stderr.strip()))
     prefix = 'run_tests_%s_' % package
     names = sorted(set(re.findall(r'^\.\.\. (%s\S+)$' % re.escape(prefix), run.stdout, re.MULTILINE)))
-    # A target that another one extends (run_tests_<package>_rostest) only groups them.
-    leaves = [n for n in names if not any(other.startswith(n + '_') for other in names)]
+    # run_tests_<package>_<type> (run_tests_<package>_rostest) only groups the targets of its type.
+    groups = {prefix + kind for kind in TARGET_TYPES}
+    leaves = [n for n in names if n not in groups]
     order = {kind: i for i, kind in enumerate(TARGET_TYPES)}
     return sorted(leaves, key=lambda n: (order.get(short_name(n, package)[0], len(order)), n))
 

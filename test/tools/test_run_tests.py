@@ -33,17 +33,20 @@ help:
 \t@echo "... run_tests_pkg"
 \t@echo "... run_tests_pkg_pytest"
 \t@echo "... run_tests_pkg_pytest_unit"
+\t@echo "... run_tests_pkg_pytest_unit_more"
 \t@echo "... run_tests_pkg_rostest"
 \t@echo "... run_tests_pkg_rostest_test_rostest_broken.test"
 \t@echo "... run_tests_pkg_rostest_test_rostest_slow.test"
 \t@echo "... _run_tests_pkg_rostest_test_rostest_slow.test"
 run_tests_pkg_pytest_unit:
 \t@mkdir -p $(RESULTS) && echo '%s' > $(RESULTS)/pytest-unit.xml && echo unit ran
+run_tests_pkg_pytest_unit_more:
+\t@mkdir -p $(RESULTS) && echo '%s' > $(RESULTS)/pytest-unit_more.xml
 run_tests_pkg_rostest_test_rostest_broken.test:
 \t@mkdir -p $(RESULTS) && echo '%s' > $(RESULTS)/rostest-broken.xml && echo broken ran
 run_tests_pkg_rostest_test_rostest_slow.test:
 \t@sleep 2.5 && mkdir -p $(RESULTS) && echo '%s' > $(RESULTS)/rostest-slow.xml
-''' % (PASSING, FAILING, PASSING.replace('name="a"', 'name="c"'))
+''' % (PASSING, PASSING.replace('name="a"', 'name="d"'), FAILING, PASSING.replace('name="a"', 'name="c"'))
 
 
 def build_folder(tmp_path):
@@ -65,14 +68,16 @@ def test_plain_output_names_each_file_as_it_starts_and_each_failure_before_the_n
     assert run.returncode == 0, run.stderr
     lines = run.stderr.splitlines()
     assert '\r' not in run.stderr, 'a pipe gets plain lines, no carriage-return updates'
-    # pytest first, then the rostests: leaf targets only, one line each as it starts.
+    # pytest first, then the rostests: leaf targets only (unit_more too, though its name extends unit's),
+    # one line each as it starts.
     assert [re.sub(r', \d+:\d\d$', '', l) for l in lines] == [
-        '[tests] variant 1/3 pytest unit: 0 failed so far',
-        '[tests] variant 2/3 rostest broken.test: 0 failed so far',
+        '[tests] variant 1/4 pytest unit: 0 failed so far',
+        '[tests] variant 2/4 pytest unit_more: 0 failed so far',
+        '[tests] variant 3/4 rostest broken.test: 0 failed so far',
         'FAILED  variant/rostest-broken.xml: test_broken',
         WHY,
-        '[tests] variant 3/3 rostest slow.test: 1 failed so far',
-        '[tests] variant: 5 passed, 1 failed',
+        '[tests] variant 4/4 rostest slow.test: 1 failed so far',
+        '[tests] variant: 7 passed, 1 failed',
     ], run.stderr
     assert not any(CI_LINE.search(l) for l in lines), 'only the closing summary may look like CI\'s line'
     log = (tmp_path / 'tests.log').read_text()
@@ -101,7 +106,7 @@ def test_on_a_terminal_one_line_updates_in_place_and_a_failure_gets_its_own_line
     assert child.wait(timeout=60) == 0
     text = output.decode()
     screens = text.split('\r')
-    slow = [s for s in screens if s.startswith('[tests] variant 3/3 rostest slow.test')]
+    slow = [s for s in screens if s.startswith('[tests] variant 4/4 rostest slow.test')]
     assert len(slow) >= 2, 'the line of a running file is redrawn while it runs (elapsed time): %r' % text
     assert '\r\x1b[KFAILED  variant/rostest-broken.xml: test_broken\n%s\n' % WHY in text.replace('\r\n', '\n'), text
     assert text.replace('\r\n', '\n').endswith('\n'), 'the last status line is ended, the next output starts clean'
@@ -115,8 +120,8 @@ def test_failures_counted_before_count_in_failed_so_far(tmp_path):
     run = subprocess.run(run_tests_args(build, tmp_path, '--counted', str(earlier), '--plain'),
                          stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          universal_newlines=True, timeout=120)
-    assert '[tests] variant 1/3 pytest unit: 1 failed so far' in run.stderr, run.stderr
-    assert '[tests] variant 3/3 rostest slow.test: 2 failed so far' in run.stderr, run.stderr
+    assert '[tests] variant 1/4 pytest unit: 1 failed so far' in run.stderr, run.stderr
+    assert '[tests] variant 4/4 rostest slow.test: 2 failed so far' in run.stderr, run.stderr
 
 
 def test_the_log_gives_each_jobs_cpu_time_and_its_own_time(tmp_path):
@@ -184,9 +189,10 @@ def test_the_cell_targets_of_the_scope_file_are_left_out_and_the_rest_run(tmp_pa
     lines = [re.sub(r', \d+:\d\d$', '', l) for l in run.stderr.splitlines()]
     assert lines == [
         "[tests] variant: the cell's 1 targets run in another variant's pass (scope.yaml)",
-        '[tests] variant 1/2 pytest unit: 0 failed so far',
-        '[tests] variant 2/2 rostest slow.test: 0 failed so far',
-        '[tests] variant: 4 passed, 0 failed',
+        '[tests] variant 1/3 pytest unit: 0 failed so far',
+        '[tests] variant 2/3 pytest unit_more: 0 failed so far',
+        '[tests] variant 3/3 rostest slow.test: 0 failed so far',
+        '[tests] variant: 6 passed, 0 failed',
     ], run.stderr
     assert 'broken ran' not in (tmp_path / 'tests.log').read_text()
 
