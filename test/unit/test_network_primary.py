@@ -255,3 +255,30 @@ def test_the_primary_interface_announces_a_programs_start_and_end_and_its_runtim
     line, column = struct.unpack_from('>II', [body for kind, body in messages if kind == 10][0])
     assert line == 3
     client.close()
+
+
+def test_a_programs_textmsg_reaches_the_primary_clients_between_its_start_and_end(cell):
+    # As ur_client_library's test against the robot reads it: KEY started, TEXT "still running", KEY stopped.
+    client = PrimaryClient(cell.faces.port('primary'))
+    client.package()
+    client.send('def talking():\n  textmsg("still ", "running")\n  sleep(0.1)\n  sync()\nend\n')
+    messages = robot_messages(client, cell, lambda m: any(kind == 7 and key(body)[0] == 'PROGRAM_XXX_STOPPED'
+                                                          for kind, body in m), 'the program\'s end')
+    said = [(kind, key(body) if kind == 7 else body.decode()) for kind, body in messages if kind in (0, 7)]
+    assert said == [(7, ('PROGRAM_XXX_STARTED', 'talking')), (0, 'still running'),
+                    (7, ('PROGRAM_XXX_STOPPED', 'talking'))]
+    client.close()
+
+
+def test_a_loop_of_textmsg_sends_a_few_a_cycle_and_the_client_keeps_its_connection(cell):
+    client = PrimaryClient(cell.faces.port('primary'))
+    client.package()
+    client.send('def chatty():\n  i = 0\n  while i < 150:\n    textmsg("line ", i)\n    i = i + 1\n  end\n'
+                '  sleep(0.1)\nend\n')
+    messages = robot_messages(client, cell, lambda m: any(kind == 7 and key(body)[0] == 'PROGRAM_XXX_STOPPED'
+                                                          for kind, body in m), 'the program\'s end')
+    texts = [body.decode() for kind, body in messages if kind == 0]
+    # The loop runs within a cycle or two of the controller's budget: ten lines from each, in order.
+    assert texts[:10] == ['line %d' % i for i in range(10)] and len(texts) <= 20, texts
+    assert all('line %d' % i in cell.core.robot.log for i in range(150)), 'the log keeps every line'
+    client.close()

@@ -29,7 +29,7 @@ PORTS = {'primary': 30001, 'secondary': 30002}
 # The read-only twins (UR's client interface document): the same packages, nothing taken in.
 READ_ONLY_PORTS = {'primary': 30011, 'secondary': 30012}
 ROBOT_STATE, ROBOT_MESSAGE = 16, 20
-VERSION, KEY, RUNTIME_EXCEPTION = 3, 7, 10  # robot message types
+TEXT, VERSION, KEY, RUNTIME_EXCEPTION = 0, 3, 7, 10  # robot message types
 # Robot message sources as ur_client_library's captures have them: the controller's own messages, and
 # the runtime's (runtime exceptions).
 SOURCE_CONTROLLER, SOURCE_RUNTIME = -2, -3
@@ -136,6 +136,12 @@ def key_message(title, text, timestamp=0):
                          timestamp)
 
 
+def text_message(text, timestamp=0):
+    """A TEXT robot message: a running program's textmsg, its text all the body. No capture of one gives its
+    source; the runtime's, as on the runtime's exceptions."""
+    return robot_message(TEXT, SOURCE_RUNTIME, text.encode('utf-8'), timestamp)
+
+
 def runtime_exception_message(line, column, text, timestamp=0):
     """A RUNTIME_EXCEPTION robot message: where the program failed, and why."""
     return robot_message(RUNTIME_EXCEPTION, SOURCE_RUNTIME, struct.pack('>II', line, column) + text.encode('utf-8'),
@@ -160,12 +166,14 @@ class Primary(listen.Broadcast):
 
     def cycle(self, dt, read, events=()):
         """After a control cycle of `dt` s: its program events as robot messages (('PROGRAM_STARTED' or
-        'PROGRAM_STOPPED', name) or ('RUNTIME_EXCEPTION', line, column, text)), and a state on the cycle
-        that reaches each tenth of a second."""
+        'PROGRAM_STOPPED', name), ('TEXT', text) or ('RUNTIME_EXCEPTION', line, column, text)), and a state on
+        the cycle that reaches each tenth of a second."""
         stamp = int(round((self.time + dt) * 1000.0))
         for event in events:
             if event[0] == 'RUNTIME_EXCEPTION':
                 self.tell(runtime_exception_message(*event[1:], timestamp=stamp))
+            elif event[0] == 'TEXT':
+                self.tell(text_message(event[1], timestamp=stamp))
             else:
                 self.tell(key_message(KEY_TITLES[event[0]], event[1], timestamp=stamp))
         before, self.time = self.time, self.time + dt

@@ -71,6 +71,11 @@ SET_MODE_TIMEOUT = 30.0
 # Log levels of the lines the core has to say (the node writes them to rosout).
 ERROR, WARN, INFO = 'error', 'warn', 'info'
 PROGRAM_STARTED, PROGRAM_STOPPED, RUNTIME_EXCEPTION = 'PROGRAM_STARTED', 'PROGRAM_STOPPED', 'RUNTIME_EXCEPTION'
+TEXT = 'TEXT'  # a program's textmsg
+# A program's text messages the primary interface's clients get per control cycle: a loop of textmsg without
+# sync() writes up to 200 lines a cycle, which would overflow a client's queue and end its connection. The
+# robot's log keeps every line.
+TEXT_MESSAGES_PER_CYCLE = 10
 PROGRAM_EVENTS = 100  # program events kept for the faces between two cycles
 # How far back (s) the controller's history of joints and wrench reaches (URScript's
 # get_actual_joint_positions_history, tool_contact). The manual gives no bound; a second is ours.
@@ -534,6 +539,13 @@ class ArmCore(object):
         """A line of the robot's log (textmsg, popup), which the node also writes to rosout."""
         self.robot.add_log(text)
         self._say(INFO, 'robot log: %s' % text)
+
+    def program_text(self, text):
+        """A program's textmsg: a line of the robot's log, and a text message to the primary interface's
+        clients, as the controller sends one between the program's start and end."""
+        self.robot_log(text)
+        if sum(1 for event in self.program_events if event[0] == TEXT) < TEXT_MESSAGES_PER_CYCLE:
+            self.program_events.append((TEXT, text))
 
     def script_command(self, text):
         """A program on script_command: a primary one replaces the running program, a secondary runs beside."""

@@ -925,7 +925,7 @@ class ScriptRobot(object):
     # the log and the rest
 
     def _textmsg(self, s1, s2):
-        self.core.robot_log(to_str(s1) + to_str(s2))
+        self.core.program_text(to_str(s1) + to_str(s2))
 
     def _popup(self, s, title, warning, error, blocking):
         self.core.robot_log('%s: %s' % (to_str(title), to_str(s)))
