@@ -62,6 +62,13 @@ def test_each_device_answers_where_its_line_says(on_wire):
     sensor = minimalmodbus.Instrument('/dev/' + on_wire['ft'][2], 9, mode=minimalmodbus.MODE_RTU)
     sensor.serial.baudrate, sensor.serial.timeout = 19200, 5.0
     assert chr(sensor.read_register(500) >> 8) == 'F'  # rq_sensor's probe: the firmware's first letter
+    # Its accelerometer (registers 190 to 192, thousandths of g), held still: gravity's reaction, 1 g.
+    deadline, acceleration = time.monotonic() + COME_UP, [0, 0, 0]
+    while not any(acceleration):  # zero until the node has the sensor's pose from TF
+        assert time.monotonic() < deadline, 'the accelerometer read nothing'
+        acceleration = [r - 0x10000 if r & 0x8000 else r for r in sensor.read_registers(190, 3)]
+        time.sleep(0.1)
+    assert sum(a * a for a in acceleration) ** 0.5 == pytest.approx(1000, abs=3), acceleration
     sensor.serial.close()
     gripper = minimalmodbus.Instrument(on_wire['gripper'][2], 9, mode=minimalmodbus.MODE_RTU)
     gripper.serial.baudrate, gripper.serial.timeout = 115200, 5.0

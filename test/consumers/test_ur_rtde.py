@@ -587,6 +587,10 @@ def test_pymodbus_reads_the_ft300_identity_as_rq_sensor_prints_it_and_the_force_
             found = {tuple(r - p for r, p in zip(force, topic)) for topic in published}
             zeros = found if zeros is None else zeros & found
         assert zeros and len(set(read)) > 1, (read, len(published))  # and the registers follow the readings
+        # The accelerometer (190 to 192, thousandths of g: Robotiq's FT-150/300 manual), MuJoCo's at the
+        # sensor: the arm holds still, so it reads gravity's reaction, 1 g.
+        acceleration = [r - 0x10000 if r & 0x8000 else r for r in registers(190, 3)]
+        assert sum(a * a for a in acceleration) ** 0.5 == pytest.approx(1000, abs=10), acceleration
     finally:
         if getattr(recording, 'process', None) is not None:
             recording.process.terminate()

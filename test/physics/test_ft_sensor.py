@@ -43,6 +43,18 @@ def test_at_rest_the_reading_is_the_kinematic_simulations(make_cell, robot, pose
     assert np.linalg.norm(reading[3:] - expected[3:]) < 0.005 * weight * 0.1, (reading, expected)
 
 
+@pytest.mark.parametrize('pose', sorted(POSES))
+def test_at_rest_the_accelerometer_reads_one_g_against_gravity_in_the_sensor_frame(make_cell, robot, pose):
+    # Held still, an accelerometer reads gravity's reaction: 1 g, world up, here in the sensor frame from
+    # the URDF's forward kinematics.
+    cell = make_cell('', POSES[pose])
+    Arm(cell).hold(1.0)
+    model = kinematics.Model(robot[1])
+    rotation = model.transform(model.root(), FRAME, dict(zip(ARM_JOINTS, POSES[pose])))[:3, :3]
+    expected = rotation.T.dot([0.0, 0.0, STANDARD_GRAVITY])
+    assert np.linalg.norm(cell.accelerometer() - expected) < 0.01 * STANDARD_GRAVITY, (cell.accelerometer(), expected)
+
+
 def test_a_hanging_load_pulls_along_z_when_the_sensor_z_points_down(make_cell, robot):
     cell = make_cell('', START)
     Arm(cell).hold(1.0)

@@ -7,6 +7,7 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from ur3_ft_gripper_description import kinematics
@@ -48,8 +49,9 @@ def test_a_node_process_reads_the_wrench_and_grasps_through_the_link(served):
     out = json.loads(run.stdout)
     assert out['info']['ft_frame'] == 'robotiq_ft_frame_id'
     assert out['info']['gripper']['grip_force_range'] == [10.0, 125.0]
-    stamp, wrench = out['wrench']
+    stamp, wrench, acceleration = out['wrench']
     assert stamp >= 0.0 and wrench[2] == pytest.approx(0.975 * 9.80665, rel=0.02)  # the 2F-140 hanging
+    assert np.linalg.norm(acceleration) == pytest.approx(9.80665, rel=0.01)  # held still: 1 g
     assert out['finger']['motion'] == 'on_object'
     assert out['finger']['opening'] == pytest.approx(0.05, abs=0.001)
     with server.lock:
@@ -70,7 +72,7 @@ def test_a_wrong_key_or_request_is_refused_in_one_line(served):
 
 
 def sample_timesteps(samples, timestep):
-    return [int(round(t / timestep)) for t, _ in samples]
+    return [int(round(t / timestep)) for t, _, _ in samples]
 
 
 def test_the_ft_node_receives_every_wrench_sample_once_however_late_it_asks(served, robot):
@@ -95,10 +97,13 @@ def test_the_ft_node_receives_every_wrench_sample_once_however_late_it_asks(serv
     first = (int(round(started / timestep)) // 5 + 1) * 5
     steps = sample_timesteps(kept, timestep)
     assert steps == list(range(first, steps[-1] + 1, 5)) and len(steps) >= 100
-    assert [t for t, _ in kept] == [n * timestep for n in steps]
+    assert [t for t, _, _ in kept] == [n * timestep for n in steps]
     assert kept[-1][0] <= now < kept[-1][0] + 0.01
     mass, _ = inertials.mass_below(kinematics.Model(robot[1]), client.info['ft_frame'])
-    assert all(wrench[2] == pytest.approx(mass * STANDARD_GRAVITY, rel=0.005) for _, wrench in kept)
+    assert all(wrench[2] == pytest.approx(mass * STANDARD_GRAVITY, rel=0.005) for _, wrench, _ in kept)
+    # The sensor points down, held still: its accelerometer reads gravity's reaction along its -z.
+    assert all(np.allclose(acceleration, (0.0, 0.0, -STANDARD_GRAVITY), atol=0.01 * STANDARD_GRAVITY)
+               for _, _, acceleration in kept)
     # Another period starts the keeping anew at it.
     started, samples, dropped = client.wrench_samples(0.02)
     assert samples == [] and dropped == 0

@@ -94,6 +94,17 @@ def test_the_force_registers_hold_the_last_reading_in_counts(line):
     assert signed(line.client.read_registers(183, 3, functioncode=4)) == [123, -456, 7891]
 
 
+def test_the_accelerometer_registers_hold_the_readings_acceleration_in_thousandths_of_g(line):
+    # Robotiq's FT-150/300 manual: registers 190 to 192, acceleration X, Y, Z (g) = value / 1000.
+    assert signed(line.client.read_registers(190, 3)) == [0, 0, 0]
+    line.sensor.reading((1.0, 2.0, 3.0, 0.1, 0.2, 0.3), (0.0123, -0.5, 0.866))
+    assert signed(line.client.read_registers(190, 3, functioncode=3)) == [12, -500, 866]
+    assert signed(line.client.read_registers(192, 1, functioncode=4)) == [866]
+    line.sensor.reading((1.0, 2.0, 3.0, 0.1, 0.2, 0.3))  # a reading without one keeps the last
+    assert signed(line.client.read_registers(190, 3)) == [12, -500, 866]
+    assert line.logged == []
+
+
 def test_the_stream_carries_one_frame_per_reading_in_order_until_the_stop(line):
     assert line.raw(START_STREAM)[:8] == STARTED
     rng = random.Random(300)

@@ -219,9 +219,8 @@ class SensorModel(object):
 
     def true_for_quaternion(self, x, y, z, w):
         """The noise-free wrench of the modelled load for the sensor's orientation (a unit quaternion)."""
-        # Gravity (world -z) in the sensor frame: minus the rotation matrix's last row.
-        return wrench_model.gravity_wrench(2.0 * (y * w - x * z), -2.0 * (y * z + x * w),
-                                           2.0 * (x * x + y * y) - 1.0, self._mass, self._com)
+        return wrench_model.gravity_wrench(*wrench_model.gravity_direction(x, y, z, w), mass=self._mass,
+                                           com=self._com)
 
     def read(self, true, index=None):
         """(fx, fy, fz, tx, ty, tz), as the device sends it, for the true wrench `true` (six floats).
@@ -379,8 +378,10 @@ class _Log(object):
 class GravitySource(object):
     """The true wrench of the kinematic simulation: the modelled load's weight for the sensor's pose in TF.
 
-    `readings(now)`: [(stamp, true wrench)], one for the pose at `now` (rospy.Time), or none while the
-    pose is unknown or stale (PoseWatch says so).
+    `readings(now)`: [(stamp, true wrench, acceleration)], one for the pose at `now` (rospy.Time), or none
+    while the pose is unknown or stale (PoseWatch says so). The acceleration (g, sensor frame) is what the
+    sensor's accelerometer reads held still: gravity's reaction. The kinematic arm's own accelerations are
+    not in it (the physics cell's reading has them).
     """
 
     def __init__(self, rospy, settings, sensor):
@@ -402,7 +403,8 @@ class GravitySource(object):
         if not self.watch.fresh(stamped.header.stamp.to_sec(), now.to_sec()):
             return ()
         q = stamped.transform.rotation
-        return ((now, self.sensor.true_for_quaternion(q.x, q.y, q.z, q.w)),)
+        gx, gy, gz = wrench_model.gravity_direction(q.x, q.y, q.z, q.w)
+        return ((now, self.sensor.true_for_quaternion(q.x, q.y, q.z, q.w), (-gx, -gy, -gz)),)
 
     def restart(self):
         """ROS time jumped back: what TF held is of another time."""
@@ -424,8 +426,10 @@ class CellSource(object):
             client.wrench_samples(period)  # the cell keeps samples from here on
 
     def readings(self, now):
+        """[(stamp, true wrench, acceleration in g)], as GravitySource's, from the cell's samples."""
         if not self.sim_time:
-            return ((now, self.client.wrench()[1]),)
+            wrench, specific_force = self.client.wrench()[1:]
+            return ((now, wrench, _in_g(specific_force)),)
         samples, dropped = self.client.wrench_samples(self.period)[1:]
         if dropped and not self._dropped_said:
             self._dropped_said = True
@@ -433,10 +437,16 @@ class CellSource(object):
                                'behind the physics cell; the machine is too busy for this real-time factor'
                                % dropped)
         Time = self.rospy.Time
-        return [(Time(*divmod(int(round(t * 1e9)), 1000000000)), wrench) for t, wrench in samples]
+        return [(Time(*divmod(int(round(t * 1e9)), 1000000000)), wrench, _in_g(specific_force))
+                for t, wrench, specific_force in samples]
 
     def restart(self):
         pass
+
+
+def _in_g(specific_force):
+    """An accelerometer's reading (m/s^2) in standard gravities, as the FT 300's registers give it."""
+    return tuple(a / wrench_model.STANDARD_GRAVITY for a in specific_force)
 
 
 def run(rospy):
@@ -504,7 +514,7 @@ def run(rospy):
         except link.LinkError as exc:
             lost.append(link.lost_cell(rospy, 'ft300_sim', exc))
             return
-        for stamp, true in readings:
+        for stamp, true, acceleration in readings:
             fx, fy, fz, tx, ty, tz = sensor.read(true, stamp.to_nsec() // period_ns if sim_time else None)
             stream.Fx, stream.Fy, stream.Fz, stream.Mx, stream.My, stream.Mz = fx, fy, fz, tx, ty, tz
             sensor_publisher.publish(stream)
@@ -513,7 +523,7 @@ def run(rospy):
             torque_msg.x, torque_msg.y, torque_msg.z = tx, ty, tz
             wrench_publisher.publish(message)
             if wire is not None:
-                wire[0].reading(sensor.device_reading())
+                wire[0].reading(sensor.device_reading(), acceleration)
 
     if sim_time:
         # One reading per period of simulated time, stamped with it, however late this node runs.

@@ -78,6 +78,12 @@ def load_sensor_spec(path):
                                 ('serial_number', 'firmware_version', 'production_year')})
 
 
+def gravity_direction(x, y, z, w):
+    """The unit direction of gravity (world -z) in the frame of orientation (x, y, z, w), a unit quaternion
+    in the world: minus the rotation matrix's last row."""
+    return 2.0 * (y * w - x * z), -2.0 * (y * z + x * w), 2.0 * (x * x + y * y) - 1.0
+
+
 def gravity_wrench(gx, gy, gz, mass, com, g=STANDARD_GRAVITY):
     """(fx, fy, fz, tx, ty, tz) that a load of `mass` at `com` puts on the sensor at rest.
 

@@ -36,7 +36,9 @@ What physics needs beyond the URDF (the figures and their sources are in
 * the FT 300: a site at its sensor frame with a force and a torque sensor
   (``<frame>_force``, ``<frame>_torque``); MuJoCo reports there what the
   frame's parent exerts on it, i.e. minus what the tool side exerts on the
-  sensor;
+  sensor; and an accelerometer (``<frame>_accelerometer``), the specific
+  force in the sensor frame as the FT 300's own reads it (at rest, gravity's
+  reaction: 1 g up);
 * the flange (``tool0``): the same pair of sensors, the wrench between the
   arm and everything mounted on it. An e-Series measures it there with its
   built-in sensor; a CB3 estimates it from its joint currents. The simulated
@@ -62,7 +64,7 @@ from ur3_ft_gripper_description import yaml_data
 
 EXCLUDED_REASONS = ('Adjacent', 'Default', 'Always')
 VELOCITY_SUFFIX = '_velocity'
-FORCE_SUFFIX, TORQUE_SUFFIX = '_force', '_torque'
+FORCE_SUFFIX, TORQUE_SUFFIX, ACCELEROMETER_SUFFIX = '_force', '_torque', '_accelerometer'
 
 
 def _config_path(name):
@@ -251,13 +253,16 @@ class MjcfWriter(object):
                          kv=number(gripper['finger_kv']))
 
     def sensors(self, root):
-        """Force and torque sensors at the flange and at the FT 300's sensor frame."""
+        """Force and torque sensors at the flange and at the FT 300's sensor frame, and the FT 300's
+        accelerometer."""
         frames = [frame for frame in (self.flange, self.ft_frame) if frame in self.model.robot.link_map]
         if frames:
             sensor = self.element(root, 'sensor')
         for frame in frames:
             self.element(sensor, 'force', name=frame + FORCE_SUFFIX, site=frame)
             self.element(sensor, 'torque', name=frame + TORQUE_SUFFIX, site=frame)
+        if self.ft_frame in frames:
+            self.element(sensor, 'accelerometer', name=self.ft_frame + ACCELEROMETER_SUFFIX, site=self.ft_frame)
 
 
 def export_mjcf(mappings, output, matrix_path=None):

@@ -68,8 +68,9 @@ def identity_registers(table, identity):
 
 
 class Ft300Registers(RegisterDevice):
-    """The sensor's registers: the last reading's counts (`counts`, under `lock`), its identity, and the
-    stream's start, which sets `start_pending` for the line to act on once the reply is out."""
+    """The sensor's registers: the last reading's counts (`counts`, under `lock`), its accelerometer's
+    (`acceleration_counts`), its identity, and the stream's start, which sets `start_pending` for the line
+    to act on once the reply is out."""
 
     who = 'the sensor'
 
@@ -80,14 +81,16 @@ class Ft300Registers(RegisterDevice):
         self.stream_register, self.stream_start = table['stream_register'], table['stream_start']
         self.lock = lock
         self.counts = [0] * 6
+        self.acceleration_counts = [0] * 3
         self.start_pending = False
 
     def read(self, address, count):
-        wrench = self.blocks['wrench']
-        if wrench['first'] <= address and address + count <= wrench['first'] + wrench['count']:
-            with self.lock:
-                counts = list(self.counts)
-            return [c & 0xFFFF for c in counts[address - wrench['first']:address - wrench['first'] + count]]
+        for name, measured in (('wrench', 'counts'), ('acceleration', 'acceleration_counts')):
+            block = self.blocks[name]
+            if block['first'] <= address and address + count <= block['first'] + block['count']:
+                with self.lock:
+                    counts = list(getattr(self, measured))
+                return [c & 0xFFFF for c in counts[address - block['first']:address - block['first'] + count]]
         for block in self.blocks.values():
             if block['first'] <= address and address + count <= block['first'] + block['count']:
                 return [self.fixed[address + i] for i in range(count)]
@@ -120,6 +123,7 @@ class Ft300Line(object):
         stream = table['stream']
         self.header = bytes(stream['header'])
         self.resolution = [stream['force_resolution']] * 3 + [stream['torque_resolution']] * 3
+        self.acceleration_resolution = table['acceleration_resolution']
         self.stop_byte, self.stop_count = stream['stop_byte'], stream['stop_count']
         self.streaming = False
         self._stop_run = 0
@@ -127,12 +131,17 @@ class Ft300Line(object):
 
     # -- the readings -------------------------------------------------------------------
 
-    def reading(self, values):
+    def reading(self, values, acceleration=None):
         """One reading (fx, fy, fz in N, mx, my, mz in N m, in the stream's resolution), as the node publishes
-        it: the force registers hold it, and a streaming sensor sends its frame."""
+        it: the force registers hold it, and a streaming sensor sends its frame. `acceleration` (ax, ay, az in
+        g), the accelerometer's at the same time, goes to its registers."""
         counts = [min(max(int(round(v / r)), COUNT_MIN), COUNT_MAX) for v, r in zip(values, self.resolution)]
         with self.lock:
             self.registers.counts = counts
+            if acceleration is not None:
+                self.registers.acceleration_counts = [
+                    min(max(int(round(a / self.acceleration_resolution)), COUNT_MIN), COUNT_MAX)
+                    for a in acceleration]
             if not self.streaming or self.send is None:
                 return
         self.send(self.frame(counts))

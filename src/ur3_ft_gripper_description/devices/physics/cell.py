@@ -216,6 +216,7 @@ class Cell(object):
                                 m.sensor_adr[m.sensor(frame + mjcf.FORCE_SUFFIX).id] + 3)
             self._torque = slice(m.sensor_adr[m.sensor(frame + mjcf.TORQUE_SUFFIX).id],
                                  m.sensor_adr[m.sensor(frame + mjcf.TORQUE_SUFFIX).id] + 3)
+            self._accelerometer = _sensor_slice(m, frame + mjcf.ACCELEROMETER_SUFFIX)
         flange = prefix + FLANGE
         self._flange_force = _sensor_slice(m, flange + mjcf.FORCE_SUFFIX)
         self._flange_torque = _sensor_slice(m, flange + mjcf.TORQUE_SUFFIX)
@@ -561,6 +562,13 @@ class Cell(object):
         sensordata = self.data.sensordata
         return -np.concatenate((sensordata[self._force], sensordata[self._torque]))
 
+    def accelerometer(self):
+        """(ax, ay, az) m/s^2 that the FT 300's accelerometer reads, in its sensor frame: the specific force,
+        its acceleration less gravity's (at rest, gravity's reaction, 9.81 m/s^2 up)."""
+        if self.ft_frame is None:
+            raise ValueError('the model has no FT 300')
+        return self.data.sensordata[self._accelerometer].copy()
+
     def flange_wrench(self):
         """(fx, fy, fz, tx, ty, tz) that the tool side exerts on the flange (tool0), in tool0's axes."""
         sensordata = self.data.sensordata
@@ -588,8 +596,8 @@ class Cell(object):
     def take_wrench_samples(self):
         """(samples, dropped): the samples recorded since the last call and how many of them the bound dropped.
 
-        samples: [(time, (fx, fy, fz, tx, ty, tz)), ...], oldest first, time the timesteps taken times the
-        timestep.
+        samples: [(time, (fx, fy, fz, tx, ty, tz), (ax, ay, az)), ...], oldest first, time the timesteps taken
+        times the timestep: wrench() and accelerometer() at that time.
         """
         if self._wrench_samples is None:
             raise ValueError('the cell keeps no wrench samples: call keep_wrench_samples first')
@@ -599,7 +607,8 @@ class Cell(object):
         sensordata = self._sensordata
         fx, fy, fz = sensordata[self._force].tolist()
         tx, ty, tz = sensordata[self._torque].tolist()
-        self._wrench_samples.append((count * self.timestep, (-fx, -fy, -fz, -tx, -ty, -tz)))
+        self._wrench_samples.append((count * self.timestep, (-fx, -fy, -fz, -tx, -ty, -tz),
+                                     tuple(sensordata[self._accelerometer].tolist())))
 
     # -- the 2F-140 ---------------------------------------------------------------
 

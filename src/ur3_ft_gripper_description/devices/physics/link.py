@@ -23,10 +23,11 @@ Protocol: request and reply are tuples, one reply per request, in order.
     ('hello', VERSION)              -> ('hello', VERSION, {'time': s, 'timestep': s, 'ft_frame': name or None,
                                         'gripper': None or {'min_opening': m, 'max_opening': m,
                                                             'grip_force_range': (N, N)}})
-    ('wrench',)                     -> ('wrench', time, (fx, fy, fz, tx, ty, tz))
+    ('wrench',)                     -> ('wrench', time, (fx, fy, fz, tx, ty, tz), (ax, ay, az))
                                        the FT 300's reading (N, N m, sensor frame, the tool
-                                       side on the sensor), no zero and no noise: those are the node's
-    ('wrench_samples', period)      -> ('wrench_samples', time, [(t, (fx, fy, fz, tx, ty, tz)), ...], dropped)
+                                       side on the sensor), no zero and no noise: those are the node's;
+                                       and its accelerometer's (m/s^2, sensor frame, specific force)
+    ('wrench_samples', period)      -> ('wrench_samples', time, [(t, wrench, acceleration), ...], dropped)
                                        the readings at every t that is a whole multiple of
                                        `period` (s, a whole number of timesteps) since the last
                                        such request, oldest first, t exact: what the FT 300's
@@ -71,7 +72,7 @@ import time
 from multiprocessing import AuthenticationError
 from multiprocessing.connection import Client, Listener
 
-VERSION = 3
+VERSION = 4
 # ur_robot_driver's node, which holds the cell with physics.
 ARM_NODE = 'ur_hardware_interface'
 FOLDER = 'ur3_ft_gripper_cell'
@@ -204,7 +205,8 @@ class CellServer(object):
                 return ('hello', VERSION, dict(time=cell.time, timestep=cell.timestep, ft_frame=cell.ft_frame,
                                                gripper=gripper))
             if name == 'wrench' and not arguments:
-                return ('wrench', cell.time, tuple(float(v) for v in cell.wrench()))
+                return ('wrench', cell.time, tuple(float(v) for v in cell.wrench()),
+                        tuple(float(v) for v in cell.accelerometer()))
             if name == 'wrench_samples' and len(arguments) == 1:
                 period = float(arguments[0])
                 if cell.wrench_sample_period != period:
@@ -265,12 +267,13 @@ class CellClient(object):
         return reply
 
     def wrench(self):
-        """(time, (fx, fy, fz, tx, ty, tz)) of the FT 300."""
+        """(time, (fx, fy, fz, tx, ty, tz), (ax, ay, az)) of the FT 300: its wrench and its accelerometer."""
         return self._ask('wrench')[1:]
 
     def wrench_samples(self, period):
-        """(time, [(t, (fx, fy, fz, tx, ty, tz)), ...], dropped): the FT 300's readings at every multiple t
-        of `period` since the last call (the first call starts the keeping), and how many were dropped."""
+        """(time, [(t, (fx, fy, fz, tx, ty, tz), (ax, ay, az)), ...], dropped): the FT 300's readings at every
+        multiple t of `period` since the last call (the first call starts the keeping), and how many were
+        dropped."""
         return self._ask('wrench_samples', period)[1:]
 
     def finger_samples(self, period):
