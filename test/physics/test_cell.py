@@ -245,7 +245,7 @@ def hanging_weight(urdf_text):
 
 def timesteps(cell, samples):
     """The whole number of timesteps of each sample's time."""
-    return [int(round(t / cell.timestep)) for t, _ in samples]
+    return [int(round(t / cell.timestep)) for t, _, _ in samples]
 
 
 @pytest.mark.parametrize('calls', [(0.008,), (0.002,), (0.003, 0.0131, 0.0039)],
@@ -271,12 +271,15 @@ def test_wrench_samples_come_one_per_period_of_simulated_time_each_the_hanging_g
     samples += taken
     assert dropped == 0 and len(samples) == 200
     assert timesteps(cell, samples) == list(range(first + 5, first + 1001, 5))
-    assert [t for t, _ in samples] == [n * cell.timestep for n in timesteps(cell, samples)]
+    assert [t for t, _, _ in samples] == [n * cell.timestep for n in timesteps(cell, samples)]
     assert samples[-1][0] == cell.time
     weight = hanging_weight(robot[1])
-    for _, (fx, fy, fz, tx, ty, tz) in samples:
+    for _, (fx, fy, fz, tx, ty, tz), acceleration in samples:
         assert fz == pytest.approx(weight, rel=0.005) and abs(fx) < 0.01 and abs(fy) < 0.01
+        # The sensor points down and holds still: its accelerometer reads gravity's reaction along -z.
+        assert np.allclose(acceleration, (0.0, 0.0, -STANDARD_GRAVITY), atol=0.01 * STANDARD_GRAVITY)
     assert samples[-1][1] == tuple(cell.wrench())  # the last one is the reading of its time
+    assert samples[-1][2] == tuple(cell.accelerometer())
 
 
 def test_each_wrench_sample_is_the_reading_at_its_own_timestep(make_cell):
@@ -292,10 +295,11 @@ def test_each_wrench_sample_is_the_reading_at_its_own_timestep(make_cell):
         keeping.step(0.008)
         for _ in range(4):
             reading.step(0.002)
-            readings[int(round(reading.time / reading.timestep))] = tuple(reading.wrench())
+            readings[int(round(reading.time / reading.timestep))] = (tuple(reading.wrench()),
+                                                                      tuple(reading.accelerometer()))
     samples, dropped = keeping.take_wrench_samples()
     assert dropped == 0 and timesteps(keeping, samples) == list(range(5, 301, 5))
-    assert [wrench for _, wrench in samples] == [readings[n] for n in range(5, 301, 5)]
+    assert [(wrench, acceleration) for _, wrench, acceleration in samples] == [readings[n] for n in range(5, 301, 5)]
     assert all(readings[n] != readings[n - 1] for n in range(5, 301, 5)), 'one timestep off would go unseen'
 
 
