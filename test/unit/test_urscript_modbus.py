@@ -127,7 +127,28 @@ end''')
     assert 1 <= len(unit.codes(0)) <= 2, unit.codes(0)
 
 
+def test_a_custom_command_reaches_the_unit_as_its_function_code_and_data(arm, unit):
+    # The URScript manual's example: function code 6 (Write Single Register) with register 0x0003 and 600.
+    log, messages = run_program(arm, 'def custom():\n  modbus_send_custom_command("127.0.0.1", 255, 6, '
+                                     '[0, 3, 2, 88])\n  sleep(0.3)\n  textmsg("sent")\nend')
+    assert 'sent' in log, (log, messages)
+    assert unit.slave.get_values('holding', 3, 1) == (600,)
+    assert unit.codes(3) == [0x06]  # once: a command is no signal, nothing polls it
+
+
+def test_a_custom_command_to_a_unit_that_does_not_answer_is_one_warning(configured_model):
+    arm = make_core(configured_model, **{'~script_modbus_port': free_port()})  # nothing listens there
+    log, messages = run_program(arm, 'def custom():\n  modbus_send_custom_command("127.0.0.1", 255, 6, '
+                                     '[0, 3, 2, 88])\n  sleep(0.5)\nend')
+    warnings = [text for level, text in messages if level == 'warn' and 'custom command' in text]
+    assert len(warnings) == 1 and 'not sent' in warnings[0], messages
+
+
 @pytest.mark.parametrize('call, words', [
+    ('modbus_send_custom_command("127.0.0.1", 255, 6, [0, 3, 2, 300])', 'data: 300 is not a byte'),
+    ('modbus_send_custom_command("127.0.0.1", 255, 200, [0])', 'function_code 200: use a Modbus function code'),
+    ('modbus_send_custom_command("192.0.2.7", 255, 6, [0, 3, 2, 88])',
+     'modbus_send_custom_command: 192.0.2.7 is beyond this machine'),
     ('modbus_add_signal("127.0.0.1", 255, 0, 4, "x")', 'signal_type 4: use 0 (digital input)'),
     ('modbus_add_signal("192.0.2.7", 255, 0, 2, "x")', 'modbus_add_signal: 192.0.2.7 is beyond this machine'),
     ('modbus_get_signal_status("nothing", False)', 'modbus_get_signal_status: no MODBUS signal named "nothing"'),

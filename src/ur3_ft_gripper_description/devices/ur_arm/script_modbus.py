@@ -12,7 +12,9 @@ function code per type:
 - 2, register input: Read Input Registers (0x04);
 - 3, register output: Read Holding Registers (0x03) until a program sets it,
   then Write Single Register (0x06) at each update.
-Registers are unsigned 16-bit integers.
+Registers are unsigned 16-bit integers. modbus_send_custom_command sends a
+unit a request of the program's own (its function code and data bytes) once,
+and, as the URScript manual says, its answer is not received.
 
 The requests go out from a thread of their own, as the robot's Modbus client
 runs beside its programs: a control cycle only queues what its signals' update
@@ -20,7 +22,9 @@ frequencies make due in the controller's time, and a program reads the value
 of the last answer. modbus_tk (PyPI) frames the requests.
 """
 
+import collections
 import queue
+import socket
 import threading
 
 from ...urscript import Blocking, RuntimeFault
@@ -56,6 +60,14 @@ class Signal(object):
         return bool(self.value) if self.digital else int(self.value)
 
 
+class CustomCommand(object):
+    """A request of the program's own: (function code, data bytes) to a unit, sent once."""
+
+    def __init__(self, ip, slave, pdu):
+        self.ip, self.slave, self.pdu = ip, slave, pdu
+        self.pending = False
+
+
 class ScriptModbus(object):
     """The signals a program added, polled at their update frequencies in the controller's time.
 
@@ -70,6 +82,7 @@ class ScriptModbus(object):
         self.signals = {}
         self.requests = queue.Queue()
         self.thread = None
+        self.custom_failures = collections.deque()  # the client's thread's, for cycle() to report
 
     # -- the functions ----------------------------------------------------------------------------
 
@@ -82,15 +95,35 @@ class ScriptModbus(object):
         if not 0 <= address <= 65535:
             raise RuntimeFault('modbus_add_signal: signal_address %d: use 0 to 65535' % address)
         self.check_reach('modbus_add_signal', ip)
+        self._start('modbus_add_signal')
+        self.signals[name] = Signal(ip, slave, address, kind, name)  # a name already used: the new one
+
+    def send_custom_command(self, ip, slave, function_code, data):
+        function = 'modbus_send_custom_command'
+        if not 0 <= slave <= 255:
+            raise RuntimeFault('%s: slave_number %d: use 0 to 255' % (function, slave))
+        if not 1 <= function_code <= 127:
+            raise RuntimeFault('%s: function_code %d: use a Modbus function code, 1 to 127' % (function, function_code))
+        for byte in data:
+            if not 0 <= byte <= 255:
+                raise RuntimeFault('%s: data: %d is not a byte (0 to 255)' % (function, byte))
+        self.check_reach(function, ip)
+        self._start(function)
+        command = CustomCommand(ip, slave, bytes([function_code] + list(data)))
+        command.pending = True
+        self.requests.put(command)
+
+    def _start(self, function):
+        """The client's thread, started with the first signal or command."""
+        if self.thread is not None:
+            return
         try:
             import modbus_tk  # noqa: F401  (the client's thread frames with it)
         except ImportError:
-            raise RuntimeFault('modbus_add_signal: the simulated robot\'s MODBUS client needs modbus_tk: '
-                               'pip install modbus_tk==1.1.5 (tools/quickstart installs it)') from None
-        self.signals[name] = Signal(ip, slave, address, kind, name)  # a name already used: the new one
-        if self.thread is None:
-            self.thread = threading.Thread(target=self._serve, name='modbus client', daemon=True)
-            self.thread.start()
+            raise RuntimeFault('%s: the simulated robot\'s MODBUS client needs modbus_tk: '
+                               'pip install modbus_tk==1.1.5 (tools/quickstart installs it)' % function) from None
+        self.thread = threading.Thread(target=self._serve, name='modbus client', daemon=True)
+        self.thread.start()
 
     def delete_signal(self, name):
         self._signal('modbus_delete_signal', name)
@@ -138,6 +171,8 @@ class ScriptModbus(object):
 
     def cycle(self, dt):
         """After a control cycle of `dt` s: queue the updates now due, and report failures and recoveries."""
+        while self.custom_failures:
+            self.log(self.custom_failures.popleft())
         for signal in list(self.signals.values()):
             if signal.error != signal.reported:
                 self.log('MODBUS signal "%s" (%s:%d, slave %d, address %d): %s' % (
@@ -167,6 +202,9 @@ class ScriptModbus(object):
         while True:
             signal = self.requests.get()
             signal.pending = False
+            if isinstance(signal, CustomCommand):
+                self._send_custom(signal, modbus_tcp)
+                continue
             unit = units.get(signal.ip)
             try:
                 if unit is None:
@@ -187,3 +225,18 @@ class ScriptModbus(object):
             else:
                 signal.value, signal.error = value, None
             signal.answers += 1
+
+    def _send_custom(self, command, modbus_tcp):
+        """The command framed by modbus_tk (MBAP header and PDU) on a connection of its own; the unit's answer
+        is read and dropped within TIMEOUT, as the manual says a program does not receive it."""
+        frame = modbus_tcp.TcpQuery().build_request(command.pdu, command.slave)
+        try:
+            with socket.create_connection((command.ip, self.port), TIMEOUT) as connection:
+                connection.sendall(frame)
+                try:
+                    connection.recv(260)  # a Modbus TCP answer's most
+                except socket.timeout:
+                    pass
+        except OSError as exc:
+            self.custom_failures.append('MODBUS custom command to %s:%d, slave %d: not sent (%s)' % (
+                command.ip, self.port, command.slave, str(exc) or type(exc).__name__))

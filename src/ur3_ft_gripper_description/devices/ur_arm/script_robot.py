@@ -271,6 +271,7 @@ def _signatures(e_series, version):
         'modbus_add_signal': Signature(now, 'IP', 'slave_number', 'signal_address', 'signal_type', 'signal_name',
                                        'sequential_mode', sequential_mode=False),
         'modbus_delete_signal': Signature(now, 'signal_name'),
+        'modbus_send_custom_command': Signature(now, 'IP', 'slave_number', 'function_code', 'data'),
         'modbus_set_signal_update_frequency': Signature(now, 'signal_name', 'update_frequency'),
         # With an update frequency of 0 a read waits for the unit's answer.
         'modbus_get_signal_status': Signature(move, 'signal_name', 'is_secondary_program',
@@ -841,6 +842,14 @@ class ScriptRobot(object):
         self.modbus.add_signal(_text(IP, function + ': IP'), _integer(function, slave_number),
                                _integer(function, signal_address), _integer(function, signal_type),
                                _text(signal_name, function + ': signal_name'))
+
+    def _modbus_send_custom_command(self, IP, slave_number, function_code, data):
+        function = 'modbus_send_custom_command'
+        if not isinstance(data, list):
+            raise RuntimeFault('Type error: %s: data is a list of bytes, not %s' % (function, type_name(data)))
+        self.modbus.send_custom_command(_text(IP, function + ': IP'), _integer(function, slave_number),
+                                        _integer(function, function_code),
+                                        [_integer(function, byte) for byte in data])
 
     def _modbus_delete_signal(self, signal_name):
         self.modbus.delete_signal(_text(signal_name, 'modbus_delete_signal: signal_name'))
