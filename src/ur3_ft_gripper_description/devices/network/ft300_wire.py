@@ -135,13 +135,11 @@ class Ft300Line(object):
         """One reading (fx, fy, fz in N, mx, my, mz in N m, in the stream's resolution), as the node publishes
         it: the force registers hold it, and a streaming sensor sends its frame. `acceleration` (ax, ay, az in
         g), the accelerometer's at the same time, goes to its registers."""
-        counts = [min(max(int(round(v / r)), COUNT_MIN), COUNT_MAX) for v, r in zip(values, self.resolution)]
+        counts = _counts(values, self.resolution)
         with self.lock:
             self.registers.counts = counts
             if acceleration is not None:
-                self.registers.acceleration_counts = [
-                    min(max(int(round(a / self.acceleration_resolution)), COUNT_MIN), COUNT_MAX)
-                    for a in acceleration]
+                self.registers.acceleration_counts = _counts(acceleration, [self.acceleration_resolution] * 3)
             if not self.streaming or self.send is None:
                 return
         self.send(self.frame(counts))
@@ -173,6 +171,11 @@ class Ft300Line(object):
             if self._stop_run >= self.stop_count:
                 self.streaming, self._stop_run = False, 0
                 return  # what follows the stop in this burst is more of it
+
+
+def _counts(values, resolutions):
+    """Each value in counts of its resolution, as a signed 16-bit register holds it (clamped)."""
+    return [min(max(int(round(v / r)), COUNT_MIN), COUNT_MAX) for v, r in zip(values, resolutions)]
 
 
 def _crc_function():
