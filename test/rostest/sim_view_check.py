@@ -1,5 +1,8 @@
 #!/usr/bin/env python3
 """rostest node: in view_ur3_ft_gripper.launch, the simulated devices reach TF and RViz's topics."""
+import os
+import signal
+import time
 import unittest
 
 import numpy as np
@@ -11,7 +14,7 @@ from sensor_msgs.msg import JointState
 from robotiq_2f_gripper_control.msg import Robotiq2FGripper_robot_input, Robotiq2FGripper_robot_output
 
 from ur3_ft_gripper_description import kinematics
-from ur3_ft_gripper_description.devices import gripper_model
+from ur3_ft_gripper_description.devices import gripper_model, sim_params, wrench_model
 from ur3_ft_gripper_testing import rostest_helpers
 from ur3_ft_gripper_testing.rostest_helpers import TIMEOUT
 
@@ -60,6 +63,24 @@ class SimViewTest(unittest.TestCase):
         w = msg.wrench.force
         # The gripper's weight (0.975 kg) within a few noise deviations (0.1 N).
         self.assertAlmostEqual(np.linalg.norm([w.x, w.y, w.z]), 0.975 * 9.80665, delta=1.0)
+
+    def test_a_late_sensor_node_loses_no_reading(self):
+        """The FT 300 streams from its own clock; a node held up serves the readings late, each with its own
+        stamp, as rq_sensor reads a real unit's samples from the serial line's buffer."""
+        period_ns = round(1e9 / wrench_model.load_sensor_spec(sim_params.default_devices_file()).rate)
+        recorder = rostest_helpers.Recorder('robotiq_ft_wrench', WrenchStamped)
+        recorder.next_after(0.0)
+        node = rostest_helpers.node_pid('robotiq_ft_sensor')
+        os.kill(node, signal.SIGSTOP)
+        try:
+            time.sleep(0.3)  # the wall clock: it is the node that is held, not the cell's time
+        finally:
+            os.kill(node, signal.SIGCONT)
+        resumed = rospy.Time.now()
+        recorder.stamped_after(resumed + rospy.Duration(0.5))
+        stamps = np.array([m.header.stamp.to_nsec() for m in recorder.since(0.0)])
+        self.assertGreater(stamps[-1] - stamps[0], 0.8e9)
+        self.assertEqual(sorted(set(np.diff(stamps))), [period_ns])
 
     def test_register_command_moves_the_fingers_in_tf(self):
         self.settle(0, 3)  # activates as well (rACT 1 from reset)

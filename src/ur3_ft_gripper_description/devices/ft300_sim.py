@@ -508,9 +508,9 @@ def run(rospy):
     force_msg, torque_msg = message.wrench.force, message.wrench.torque
     lost = []
 
-    def step(now=None):
+    def step(now):
         try:
-            readings = source.readings(now or rospy.Time.now())
+            readings = source.readings(now)
         except link.LinkError as exc:
             lost.append(link.lost_cell(rospy, 'ft300_sim', exc))
             return
@@ -525,11 +525,10 @@ def run(rospy):
             if wire is not None:
                 wire[0].reading(sensor.device_reading(), acceleration)
 
-    if sim_time:
-        # One reading per period of simulated time, stamped with it, however late this node runs.
-        status = node_loop.run_on_every_tick(rospy, settings.rate, step)
-    else:
-        status = node_loop.run_at_rate(rospy, settings.rate, step, on_time_jump=source.restart)
+    # One reading per period, stamped with it, however late this node runs: the unit streams from its own
+    # clock. On the wall clock a backlog of more than a second (the machine slept) is dropped.
+    status = node_loop.run_on_every_tick(rospy, settings.rate, step, on_time_jump=source.restart,
+                                         max_backlog=None if sim_time else int(settings.rate))
     return 1 if lost else status
 
 

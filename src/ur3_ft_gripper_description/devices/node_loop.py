@@ -138,16 +138,20 @@ def run_at_rate(rospy, hz, step, on_time_jump=None):
     return 1 if master['restarted'] else 0
 
 
-def run_on_every_tick(rospy, hz, step):
+def run_on_every_tick(rospy, hz, step, on_time_jump=None, max_backlog=None):
     """Call `step(stamp)` once for every tick of 1/`hz` s of ROS time until rospy shuts down; the exit status.
 
-    For a node on a simulated clock (use_sim_time): a tick that passed while
-    the node ran late (the cell runs faster than real time, the machine is
-    busy) is still served, late, with its own time as `stamp` (a rospy.Time,
-    a whole number of periods), so that over any stretch of simulated time the
-    node publishes exactly `hz` messages a second. rospy.Rate would drop them
-    instead. A clock that jumps back (the simulation restarted) starts the
-    ticks anew.
+    A tick that passed while the node ran late (the cell runs faster than
+    real time, the machine is busy) is still served, late, with its own time
+    as `stamp` (a rospy.Time, a whole number of periods), so that over any
+    stretch of time the node publishes exactly `hz` messages a second, as a
+    device streaming from its own clock does: a real unit's samples wait in
+    the serial line's buffer for a late driver. rospy.Rate would drop them
+    instead. On the simulated clock (`max_backlog` None) every tick is
+    served; on the wall clock at most the last `max_backlog`, so that a
+    machine that slept does not replay the night. A clock that jumps back
+    (the simulation restarted) starts the ticks anew and calls
+    `on_time_jump()`.
     """
     master = watch_master(rospy)
     gate = PublishGate(rospy)
@@ -157,8 +161,12 @@ def run_on_every_tick(rospy, hz, step):
     while not rospy.is_shutdown():
         now = rospy.Time.now()
         due = now.to_nsec() // period_ns
+        if tick is not None and due < tick and on_time_jump is not None:
+            on_time_jump()
         if tick is None or due < tick:
             tick = due - 1
+        if max_backlog is not None:
+            tick = max(tick, due - max_backlog)
         while tick < due and not rospy.is_shutdown():
             tick += 1
             gate.call(step, rospy.Time(*divmod(tick * period_ns, 1000000000)))
@@ -166,6 +174,8 @@ def run_on_every_tick(rospy, hz, step):
             rospy.sleep(rospy.Time(*divmod((tick + 1) * period_ns, 1000000000)) - now)
         except rospy.ROSTimeMovedBackwardsException:
             tick = None
+            if on_time_jump is not None:
+                on_time_jump()
         except rospy.ROSInterruptException:
             break
     return 1 if master['restarted'] else 0

@@ -81,6 +81,14 @@ def master_pid(uri):
         return None
 
 
+def node_pid(name):
+    """pid of the ROS node `name`, from its own slave API (the master says where it listens)."""
+    import rosgraph
+    caller = rospy.get_name()
+    uri = rosgraph.Master(caller).lookupNode(rospy.resolve_name(name))
+    return xmlrpc.client.ServerProxy(uri).getPid(caller)[2]
+
+
 def stop(process, timeout=30):
     """SIGINT (what roslaunch and rospy expect), then SIGKILL if it does not go.
 
