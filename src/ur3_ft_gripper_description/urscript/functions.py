@@ -20,6 +20,11 @@ times angle, radians). The manual's definitions, as matrices T = [R p; 0 1]:
   orientations (metres and radians added as numbers);
 - rpy2rotvec/rotvec2rpy: roll-pitch-yaw as extrinsic X-Y-Z rotations,
   R = Rz(yaw) Ry(pitch) Rx(roll).
+Matrices (values.is_matrix) as the manual's "Matrix and Array Expressions":
+- inv(m): a square, non-singular matrix's inverse, or a pose's (pose_inv);
+- transpose(m): rows become columns. An array is a column in matrix * array,
+  so its transpose is the one-row matrix: transpose(a) * b is a's dot product
+  with b, as an array of one number.
 Only transforms3d functions that 0.3.1 (Ubuntu 20.04) has are used.
 """
 
@@ -29,7 +34,7 @@ import random as _random
 import numpy as np
 from transforms3d import axangles, euler
 
-from .values import Pose, RuntimeFault, is_number, to_str, type_name, format_number
+from .values import Pose, RuntimeFault, is_array, is_matrix, is_number, to_str, type_name, format_number
 
 REQUIRED = object()
 
@@ -215,6 +220,29 @@ def _int_of(f, rounding):
     return int(rounding(f))
 
 
+# --- matrices -------------------------------------------------------------------------
+
+def inv(m):
+    if isinstance(m, Pose):
+        return pose_inv(m)
+    if not is_matrix(m):
+        raise RuntimeFault('Type error: inv takes a matrix or a pose, not %s' % type_name(m))
+    if len(m) != len(m[0]):
+        raise RuntimeFault('inv: the matrix must be square, not %dx%d' % (len(m), len(m[0])))
+    matrix = np.array(m, dtype=float)
+    if not np.all(np.isfinite(matrix)) or np.linalg.matrix_rank(matrix) < len(m):
+        raise RuntimeFault('inv: the matrix is singular')
+    return np.linalg.inv(matrix).tolist()
+
+
+def transpose(m):
+    if is_matrix(m):
+        return [list(column) for column in zip(*m)]
+    if is_array(m) and m:
+        return [list(m)]
+    raise RuntimeFault('Type error: transpose takes a matrix or an array, not %s' % type_name(m))
+
+
 # --- lists and strings -----------------------------------------------------------------
 
 def get_list_length(v):
@@ -346,6 +374,8 @@ PURE = {
     'd2r': (lambda d: _number(d, 'd') / 180.0 * math.pi, [('d', REQUIRED)]),
     'r2d': (lambda r: _number(r, 'r') / math.pi * 180.0, [('r', REQUIRED)]),
     'norm': (norm, [('a', REQUIRED)]),
+    'inv': (inv, [('m', REQUIRED)]),
+    'transpose': (transpose, [('m', REQUIRED)]),
     'normalize': (normalize, [('v', REQUIRED)]),
     'random': (random, []),
     'binary_list_to_integer': (binary_list_to_integer, [('l', REQUIRED)]),

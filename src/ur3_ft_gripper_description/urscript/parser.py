@@ -85,8 +85,9 @@ def _begins_statement(token):
 
 
 def _poses_or_indexes(tokens):
-    """`p[` opens a pose literal, unless its brackets hold one expression: then it indexes a variable named p
-    (ur_rtde's control script scales a pose argument `p` by `p[0] = p[0] * factor`), since a pose has six."""
+    """`p[` opens a pose literal, unless its brackets hold one or two expressions: then it indexes a variable
+    named p, an array or a matrix (ur_rtde's control script scales a pose argument `p` by
+    `p[0] = p[0] * factor`), since a pose has six."""
     tokens = iter(tokens)
     for token in tokens:
         if token.type != 'POSE_OPEN':
@@ -103,7 +104,7 @@ def _poses_or_indexes(tokens):
             inside.append(inner)
             if depth == 0:
                 break
-        if commas:
+        if commas > 1:
             yield token
         else:
             yield lark.Token.new_borrow_pos('NAME', 'p', token)
@@ -331,6 +332,10 @@ def _build(t):
         return Node('pose', line, column, items)
     if kind == 'index':
         return Node('index', line, column, _build(ch[0]), _build(ch[1]))
+    if kind == 'matrix_index':
+        # m[row, column] is the column'th entry of the row'th array: it reads and assigns as m[row][column].
+        row = Node('index', line, column, _build(ch[0]), _build(ch[1]))
+        return Node('index', line, column, row, _build(ch[2]))
     if kind in ('neg', 'pos'):
         return Node(kind, line, column, _build(ch[1]))
     if kind == 'not_op':

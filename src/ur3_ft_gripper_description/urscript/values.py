@@ -11,7 +11,13 @@ What the manual leaves open, decided here (each in one place below):
   C's fmod. Division or remainder by zero is a runtime error.
 - `+` and `-` of two poses act element by element and give a pose; the
   manual's pose arithmetic is pose_add/pose_sub/pose_trans. `+` joins two
-  strings. Other list arithmetic is a type error.
+  strings.
+- Arrays (lists of numbers) and matrices (lists of equally long arrays) take
+  the operations of the manual's "Matrix and Array Expressions": matrix *
+  matrix and matrix * array as in linear algebra; array op array (same
+  length) and array or matrix op number, either side, entry by entry, for
+  + - * / %. Other list arithmetic (matrix + matrix, array * matrix, lists of
+  other things) is a type error.
 - and, or, xor, not and the conditions of if/while take bools only.
 - Ints are Python ints (the robot's are 32-bit; overflow is not modelled).
 """
@@ -155,6 +161,49 @@ def equal(a, b):
     return type_name(a) == type_name(b) and a == b
 
 
+def is_array(value):
+    """A list of numbers (not a pose): the manual's array."""
+    return type(value) is list and all(is_number(v) for v in value)
+
+
+def is_matrix(value):
+    """A list of one or more arrays of one common, non-zero length: the manual's matrix."""
+    return (type(value) is list and bool(value) and all(type(row) is list and row for row in value)
+            and len(set(len(row) for row in value)) == 1 and all(is_array(row) for row in value))
+
+
+def _sum_of_products(row, column):
+    total = 0
+    for x, y in zip(row, column):
+        total = total + x * y
+    return total
+
+
+def _list_arithmetic(op, a, b):
+    """a op b where a list takes part (see the module's notes); a type error where none applies."""
+    apply = _ARITHMETIC[op]
+    if is_number(b) and (is_array(a) or is_matrix(a)):
+        return [apply(x, b) if is_number(x) else [apply(y, b) for y in x] for x in a]
+    if is_number(a) and (is_array(b) or is_matrix(b)):
+        return [apply(a, x) if is_number(x) else [apply(a, y) for y in x] for x in b]
+    if is_array(a) and is_array(b):
+        if len(a) != len(b):
+            raise RuntimeFault('Type error: %s of arrays of lengths %d and %d' % (op, len(a), len(b)))
+        return [apply(x, y) for x, y in zip(a, b)]
+    if op == '*' and is_matrix(a) and (is_matrix(b) or is_array(b)):
+        if is_array(b):
+            if len(a[0]) != len(b):
+                raise RuntimeFault('Type error: a %dx%d matrix cannot multiply an array of length %d'
+                                   % (len(a), len(a[0]), len(b)))
+            return [_sum_of_products(row, b) for row in a]
+        if len(a[0]) != len(b):
+            raise RuntimeFault('Type error: a %dx%d matrix cannot multiply a %dx%d matrix'
+                               % (len(a), len(a[0]), len(b), len(b[0])))
+        columns = list(zip(*b))
+        return [[_sum_of_products(row, column) for column in columns] for row in a]
+    raise _type_error(op, a, b)
+
+
 def binary(op, a, b):
     """a op b for the arithmetic and comparison operators."""
     if op in _ARITHMETIC:
@@ -162,8 +211,12 @@ def binary(op, a, b):
             return _ARITHMETIC[op](a, b)
         if op == '+' and isinstance(a, str) and isinstance(b, str):
             return a + b
-        if op in '+-' and isinstance(a, Pose) and isinstance(b, Pose):
-            return Pose([_ARITHMETIC[op](x, y) for x, y in zip(a, b)])
+        if isinstance(a, Pose) or isinstance(b, Pose):
+            if op in '+-' and isinstance(a, Pose) and isinstance(b, Pose):
+                return Pose([_ARITHMETIC[op](x, y) for x, y in zip(a, b)])
+            raise _type_error(op, a, b)
+        if isinstance(a, list) or isinstance(b, list):
+            return _list_arithmetic(op, a, b)
         raise _type_error(op, a, b)
     if op == '==':
         return equal(a, b)
