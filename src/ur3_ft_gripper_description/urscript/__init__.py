@@ -8,7 +8,9 @@
 
 `served` is {function name: physical_time} of what the robot side
 implements (moves, I/O, state); `robot.call(name, args, kwargs)` runs those
-and returns a value or a `Blocking`. The language's own functions (math,
+and returns a value or a `Blocking`, and `robot.call_method(handle, name,
+args)`, where the robot has it, a method of a handle one of its functions
+gave (a remote procedure of rpc_factory's). The language's own functions (math,
 pose math, strings, lists, sleep, sync) live here. A function the URScript
 manual has (MANUAL_FUNCTIONS, from manual_functions.txt) that nobody
 implements refuses the script with "is a URScript function the simulated

@@ -23,7 +23,7 @@ from .parser import CompileError
 # Instructions: (opcode, argument); lines and columns beside them.
 (CONST, LOAD_L, LOAD_G, STORE_L, STORE_G, BINARY, UNARY, JUMP, JUMP_FALSE, AND_JUMP, OR_JUMP, XOR,
  INDEX, STORE_INDEX_L, STORE_INDEX_G, LIST, POSE, CALL_SCRIPT, CALL_PURE, CALL_ROBOT, SLEEP, SYNC,
- RETURN, POP, HALT, RUN, JOIN, KILL, JUMP_IF_SET, ENTER_CRITICAL, EXIT_CRITICAL) = range(31)
+ RETURN, POP, HALT, RUN, JOIN, KILL, JUMP_IF_SET, ENTER_CRITICAL, EXIT_CRITICAL, CALL_METHOD) = range(32)
 
 
 class Code(object):
@@ -383,6 +383,15 @@ class Compiler(object):
             code.emit(POSE, 6, node)
         elif kind == 'call':
             self.call(node)
+        elif kind == 'method':
+            # A remote procedure (rpc_factory's handle): the program waits for the server's answer.
+            if self.secondary:
+                raise CompileError('a secondary program may not use physical time: %s' % node.b,
+                                   node.line, node.column)
+            self.expr(node.a)
+            for arg in node.c:
+                self.expr(arg)
+            code.emit(CALL_METHOD, (node.b, len(node.c)), node)
         elif kind == 'run':
             if self.secondary:
                 raise CompileError('a secondary program runs no threads', node.line, node.column)

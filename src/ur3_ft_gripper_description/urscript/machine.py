@@ -81,7 +81,8 @@ class _Thread(object):
 
 
 class Run(object):
-    """One run of a compiled Program against a robot (`robot.call(name, args, kwargs)`)."""
+    """One run of a compiled Program against a robot (`robot.call(name, args, kwargs)`, and
+    `robot.call_method(handle, name, args)` for programs that call a handle's methods)."""
 
     def __init__(self, program, robot, budget=20000):
         self.program = program
@@ -336,6 +337,24 @@ class Run(object):
                     raise _as_fault(exc)
                 except (ArithmeticError, TypeError) as exc:
                     raise _call_fault(name, given, exc)
+                if isinstance(result, Blocking):
+                    thread.wait = ('blocking', result)
+                    thread.spent = True
+                    self.instructions += self.budget - left
+                    return
+                stack.append(result)
+            elif op == C.CALL_METHOD:
+                left -= ROBOT_CALL_COST
+                method, count = arg
+                given = [values.copy(v) for v in _take(stack, count)]
+                handle = stack.pop()
+                call_method = getattr(self.robot, 'call_method', None)
+                if call_method is None:
+                    raise RuntimeFault('Type error: a %s has no method %s' % (values.type_name(handle), method))
+                try:
+                    result = call_method(handle, method, given)
+                except ValueError as exc:
+                    raise _as_fault(exc)
                 if isinstance(result, Blocking):
                     thread.wait = ('blocking', result)
                     thread.spent = True

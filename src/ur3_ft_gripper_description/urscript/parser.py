@@ -321,6 +321,13 @@ def _build(t):
                         raise CompileError('a positional argument follows a named one', *_pos(arg))
                     args.append(_build(arg.children[0]))
         return Node('call', line, column, _ident(ch[0]), args, kwargs)
+    if kind == 'method_call':
+        args = []
+        for arg in (ch[2].children if len(ch) > 2 and ch[2] is not None else []):
+            if arg.data == 'kwarg':
+                raise CompileError('a remote procedure takes its arguments by position', *_pos(arg))
+            args.append(_build(arg.children[0]))
+        return Node('method', line, column, _build(ch[0]), _ident(ch[1]), args)
     if kind == 'run_thread':
         return Node('run', line, column, _ident(ch[0]))
     if kind == 'list_lit':

@@ -113,8 +113,9 @@ def main(argv=None):
     parser.add_argument('--kinematics-params', default='',
                         help='a calibration YAML (ur_calibration\'s output) instead of ur_description\'s default')
     parser.add_argument('--script-socket-hosts', default='',
-                        help='addresses beyond loopback that URScript\'s socket_open may connect to: IPv4 addresses or '
-                             'networks (192.168.56.1, 192.168.56.0/24) separated by commas (default: loopback only)')
+                        help='addresses beyond loopback that URScript\'s socket_open, rpc_factory and modbus_* '
+                             'functions may connect to: IPv4 addresses or networks (192.168.56.1, 192.168.56.0/24) '
+                             'separated by commas (default: loopback only)')
     parser.add_argument('--external-control-host-ip', default=listen.LOOPBACK,
                         help='the External Control URCap\'s Host IP: where the driver\'s script sender runs, which '
                              'it asks for the program when external_control.urp plays (default: %s)'

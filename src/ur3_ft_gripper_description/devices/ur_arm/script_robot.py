@@ -40,6 +40,7 @@ from . import cartesian
 from . import force_mode as fm
 from . import robot_state as rs
 from . import script_sockets as ss
+from .script_rpc import ScriptRpc
 from .script_modbus import DIGITAL_OUTPUT, REGISTER_OUTPUT, ScriptModbus
 from . import tool_motion as tm
 from .arm_kinematics import rigid_inverse
@@ -272,6 +273,7 @@ def _signatures(e_series, version):
                                        'sequential_mode', sequential_mode=False),
         'modbus_delete_signal': Signature(now, 'signal_name'),
         'modbus_send_custom_command': Signature(now, 'IP', 'slave_number', 'function_code', 'data'),
+        'rpc_factory': Signature(now, 'type', 'url'),
         'modbus_set_signal_update_frequency': Signature(now, 'signal_name', 'update_frequency'),
         # With an update frequency of 0 a read waits for the unit's answer.
         'modbus_get_signal_status': Signature(move, 'signal_name', 'is_secondary_program',
@@ -346,6 +348,7 @@ class ScriptRobot(object):
         self.sockets = ss.ScriptSockets(lambda: core.uptime, core.socket_hosts)
         self.modbus = ScriptModbus(lambda function, ip: self.sockets.check_reach(ip, function),
                                    core.say_warning, core.modbus_port)
+        self.rpc = ScriptRpc(self.sockets.check_reach)
         self.watchdogs = {}           # rtde_set_watchdog's: {variable: (period s, action, set at uptime)}
 
     def served(self):
@@ -465,6 +468,13 @@ class ScriptRobot(object):
         if name in REGISTER_FUNCTIONS:
             return self._register(name, **bound)
         return getattr(self, '_' + name)(**bound)
+
+    def call_method(self, handle, name, args):
+        """A method of a handle a function gave the program: rpc_factory's remote procedures."""
+        return self.rpc.call(handle, name, args)
+
+    def _rpc_factory(self, type, url):
+        return self.rpc.factory(type, url)
 
     def _start_motion(self, motion):
         self.motion = motion

@@ -103,8 +103,8 @@ PARAMETERS = (
                      'server without root, the simulated gripper\'s gateway at sim_gripper_gateway_port)',
                      sim_params.number(minimum=1.0)),
     sim_params.Param('~script_socket_hosts', '', "Addresses beyond this machine's loopback that URScript's "
-                     'socket_open may connect to: IPv4 addresses or networks (192.168.56.1, 192.168.56.0/24) separated '
-                     'by commas; empty: loopback only', socket_hosts),
+                     'socket_open, rpc_factory and modbus_* functions may connect to: IPv4 addresses or networks '
+                     '(192.168.56.1, 192.168.56.0/24) separated by commas; empty: loopback only', socket_hosts),
 ) + arm_cell.PARAMETERS + sim_clock.PARAMETERS
 
 
