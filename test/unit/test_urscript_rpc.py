@@ -39,6 +39,12 @@ class Server(object):
         self.server.shutdown()
         self.server.server_close()
 
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
 
 @pytest.fixture
 def arm(configured_model):
@@ -62,8 +68,7 @@ def error_of(arm, text, cycles=2000):
 
 
 def test_the_manuals_camera_example_runs_against_a_camera_server(arm):
-    server = Server(initialize=lambda mode: mode == 'RGB', takeSnapshot=lambda: True, getTarget=lambda: POSE)
-    try:
+    with Server(initialize=lambda mode: mode == 'RGB', takeSnapshot=lambda: True, getTarget=lambda: POSE) as server:
         log = run_program(arm, program('''
 camera = rpc_factory("xmlrpc", "%s")
 if (! camera.initialize("RGB")):
@@ -74,8 +79,6 @@ target = camera.getTarget()
 camera.closeXMLRPCClientConnection()
 textmsg(target)
 ''' % server.url))
-    finally:
-        server.close()
     assert server.calls == [('initialize', ('RGB',)), ('takeSnapshot', ()), ('getTarget', ())]
     assert log == ['p[0.1, -0.2, 0.3, 0.1, 3.14, -0.2]']
 
@@ -84,29 +87,23 @@ def test_a_pose_travels_as_urs_example_reads_it_a_struct_of_x_y_z_rx_ry_rz(arm):
     def get_next_pose(p):
         assert type(p) is dict
         return dict(p, z=p['z'] + 0.05)
-    server = Server(get_next_pose=get_next_pose)
-    try:
+    with Server(get_next_pose=get_next_pose) as server:
         log = run_program(arm, program('''
 camera = rpc_factory("xmlrpc", "%s")
 next_pose = camera.get_next_pose(p[0.4, -0.1, 0.2, 0.05, 3.14159, -0.3])
 textmsg(next_pose)
 ''' % server.url))
-    finally:
-        server.close()
     assert server.calls == [('get_next_pose', ({'x': 0.4, 'y': -0.1, 'z': 0.2, 'rx': 0.05, 'ry': 3.14159,
                                                  'rz': -0.3},))]
     assert log == ['p[0.4, -0.1, 0.25, 0.05, 3.14159, -0.3]']
 
 
 def test_bools_ints_floats_strings_and_lists_arrive_as_themselves_and_come_back(arm):
-    server = Server(echo=lambda *args: list(args))
-    try:
+    with Server(echo=lambda *args: list(args)) as server:
         log = run_program(arm, program('''
 rpc = rpc_factory("xmlrpc", "%s")
 textmsg(rpc.echo(True, 12, 12.5, "Hello", [12, 1.5, 123], [[1, 2], [3, 4]]))
 ''' % server.url))
-    finally:
-        server.close()
     received = server.calls[0][1]
     assert received == (True, 12, 12.5, 'Hello', [12, 1.5, 123], [[1, 2], [3, 4]])
     assert [type(v) for v in received[:4]] == [bool, int, float, str]
@@ -114,8 +111,7 @@ textmsg(rpc.echo(True, 12, 12.5, "Hello", [12, 1.5, 123], [[1, 2], [3, 4]]))
 
 
 def test_the_control_cycle_and_the_programs_threads_go_on_while_the_server_works(arm):
-    server = Server(slow=lambda: time.sleep(1.0) or 'done')
-    try:
+    with Server(slow=lambda: time.sleep(1.0) or 'done') as server:
         log = run_program(arm, program('''
 global cycles = 0
 thread count():
@@ -130,8 +126,6 @@ answer = rpc.slow()
 kill counter
 textmsg(answer, cycles)
 ''' % server.url))
-    finally:
-        server.close()
     answer, cycles = log[0][:4], int(log[0][4:])
     # 1 s of the server's work is 500 control cycles of 2 ms, paced to the wall clock; a call that held
     # the cycle would leave one or two. 100 leaves room for a busy machine.
@@ -139,11 +133,8 @@ textmsg(answer, cycles)
 
 
 def test_a_function_the_server_does_not_have_stops_the_program_naming_it(arm):
-    server = Server(initialize=lambda mode: True)
-    try:
+    with Server(initialize=lambda mode: True) as server:
         text = error_of(arm, program('camera = rpc_factory("xmlrpc", "%s")\ncamera.calibrate(3)' % server.url))
-    finally:
-        server.close()
     assert text.startswith('script_command: RuntimeException: Runtime error in line 3, column 3 Error: '
                            'calibrate at %s: the server answered fault 1: ' % server.url)
     assert 'calibrate' in text.split('fault 1: ')[1] and text.endswith('; program stopped')
@@ -175,11 +166,8 @@ def test_a_url_the_robot_may_not_use_is_the_robots_runtime_error_at_rpc_factory(
 
 
 def test_a_struct_that_is_not_a_pose_stops_the_program_naming_its_members(arm):
-    server = Server(status=lambda: {'ok': True})
-    try:
+    with Server(status=lambda: {'ok': True}) as server:
         text = error_of(arm, program('rpc = rpc_factory("xmlrpc", "%s")\nx = rpc.status()' % server.url))
-    finally:
-        server.close()
     assert text.endswith('Error: status at %s: the server answered a struct of ok; a pose is a struct of '
                          'x, y, z, rx, ry, rz; program stopped' % server.url)
 
