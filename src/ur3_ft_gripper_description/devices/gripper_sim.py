@@ -560,17 +560,19 @@ def run(rospy):
         period = 1.0 / rate
         status = node_loop.run_on_every_tick(rospy, rate, lambda stamp: publish_after(period, stamp.to_sec()))
     else:
-        clock = {'time': rospy.Time.now()}
+        # On the wall clock too a status per period, those of a stretch the node ran late served late: the
+        # register machine moves on by the time between two ticks (a second at most: a machine that slept).
+        clock = {'time': None}
 
-        def step():
-            now = rospy.Time.now()
-            publish_after((now - clock['time']).to_sec())
-            clock['time'] = now
+        def step(stamp):
+            last, clock['time'] = clock['time'], stamp
+            publish_after(0.0 if last is None else (stamp - last).to_sec())
 
         def restart_clock():
-            clock['time'] = rospy.Time.now()
+            clock['time'] = None
 
-        status = node_loop.run_at_rate(rospy, rate, step, on_time_jump=restart_clock)
+        status = node_loop.run_on_every_tick(rospy, rate, step, on_time_jump=restart_clock,
+                                             max_backlog=int(rate))
     return 1 if lost else status
 
 
