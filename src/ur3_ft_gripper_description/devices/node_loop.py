@@ -171,7 +171,8 @@ def run_on_every_tick(rospy, hz, step, on_time_jump=None, max_backlog=None):
             tick += 1
             gate.call(step, rospy.Time(*divmod(tick * period_ns, 1000000000)))
         try:
-            rospy.sleep(rospy.Time(*divmod((tick + 1) * period_ns, 1000000000)) - now)
+            # Until the next tick from the time now, after serving: a long burst is not slept again.
+            rospy.sleep(rospy.Time(*divmod((tick + 1) * period_ns, 1000000000)) - rospy.Time.now())
         except rospy.ROSTimeMovedBackwardsException:
             tick = None
             if on_time_jump is not None:
