@@ -183,6 +183,12 @@ class Run(object):
             thread.frames[-1].stack.append(value)
         return ready
 
+    def _block(self, thread, blocking, left):
+        """`thread` waits for a robot call that takes time; it has used `left` less of its budget."""
+        thread.wait = ('blocking', blocking)
+        thread.spent = True
+        self.instructions += self.budget - left
+
     def _execute(self, thread):
         try:
             self._run(thread)
@@ -338,9 +344,7 @@ class Run(object):
                 except (ArithmeticError, TypeError) as exc:
                     raise _call_fault(name, given, exc)
                 if isinstance(result, Blocking):
-                    thread.wait = ('blocking', result)
-                    thread.spent = True
-                    self.instructions += self.budget - left
+                    self._block(thread, result, left)
                     return
                 stack.append(result)
             elif op == C.CALL_METHOD:
@@ -356,9 +360,7 @@ class Run(object):
                 except ValueError as exc:
                     raise _as_fault(exc)
                 if isinstance(result, Blocking):
-                    thread.wait = ('blocking', result)
-                    thread.spent = True
-                    self.instructions += self.budget - left
+                    self._block(thread, result, left)
                     return
                 stack.append(result)
             elif op == C.SLEEP:
