@@ -6,8 +6,11 @@ hand where the manual gives only the expression, and a least-squares fit
 through points on a known line, as UR's article on linear algebra in
 URScript solves one.
 """
+import os
+
 import pytest
 
+from ur3_ft_gripper_testing.model import PACKAGE_DIR
 from ur3_ft_gripper_description.urscript import CompileError, Run, RuntimeFault, compile_script, to_str
 
 DT = 0.002
@@ -125,3 +128,12 @@ def test_a_pose_literal_of_other_than_six_is_still_refused_when_the_program_comp
     with pytest.raises(CompileError) as caught:
         compile_script('x = p[1,2,3]\n', {'textmsg': False})
     assert 'a pose has 6 elements, not 3' in str(caught.value)
+
+
+def test_the_corpus_program_fits_its_line_and_turns_its_point():
+    with open(os.path.join(PACKAGE_DIR, 'test', 'data', 'urscript', 'matrices.script')) as f:
+        program, log = run(f.read())
+    assert program.error is None
+    # y = 2 x + 1; a quarter turn about z takes (0.2, 0, 0.3) to (0, 0.2, 0.3), then 0.1 m (0.15 m) along x.
+    assert log == ['intercept and slope [1, 2]', 'point [0.1, 0.2, 0.3, 1] moved [0.15, 0.2, 0.3, 1]',
+                   'scaled [3, 6, 9] size [4, 4]']
