@@ -125,9 +125,11 @@ class SimDevicesTest(unittest.TestCase):
         cls.real_status = rospy.Publisher('real_unit/Robotiq2FGripperRobotInput',
                                           Robotiq2FGripper_robot_input, queue_size=300)
         cls.fingers = gripper_model.GripperKinematics(rospy.get_param('robot_description'))
+        cls.settled = rospy.Time(0)  # on physics: the cell's time the arm has rested a second at its target
         if PHYSICS:
             from ur3_ft_gripper_description import clients
             cls.ur_arm = clients.UrArm(rospy)
+            cls.arm_joints = Recorder('joint_states', JointState, keep=lambda m: ARM[0] in m.name)
         else:
             threading.Thread(target=cls._publish_joints, daemon=True).start()
         for publisher in (cls.command, cls.real_status) + (() if PHYSICS else (cls.holding_command,)):
@@ -161,10 +163,14 @@ class SimDevicesTest(unittest.TestCase):
         the orientation TF shows then (the servos hold it within a fraction of a milliradian).
         """
         if PHYSICS:
+            sent = time.monotonic()
             self.ur_arm.move_steadily(arm)
-            rospy.sleep(1.0)  # on the cell's clock: a busy machine slows it
+            # A second of the cell's clock from the arm's first joint state at rest at the target. Not a second
+            # of this node's clock from now: on a busy machine this node's clock trails the cell's, by more
+            # when the move ends than a second later, and its second is then less of the arm at rest.
+            type(self).settled = self.at_rest(arm, sent) + rospy.Duration(1.0)
             # TF at that moment: this node's listener may trail the cell, and the latest it has be the last pose.
-            return self.lookup('base_link', SENSOR, stamp=rospy.Time.now())[:3, :3]
+            return self.lookup('base_link', SENSOR, stamp=self.settled)[:3, :3]
         type(self).arm = list(arm)
         expected = self.model.transform('base_link', SENSOR, dict(zip(ARM, arm)))
 
@@ -176,11 +182,27 @@ class SimDevicesTest(unittest.TestCase):
         rostest_helpers.wait_for(shown, 'TF to show the commanded arm pose %s' % arm, step=0.02)
         return expected[:3, :3]
 
+    def at_rest(self, arm, since):
+        """The stamp of the first joint state received after `since` (monotonic s) with the arm at rest at `arm`.
+
+        One publisher's messages arrive in the order it sent them, so every state of the move before it has
+        arrived too."""
+        def found():
+            for m in self.arm_joints.since(since):
+                q = [m.position[m.name.index(j)] for j in ARM]
+                qd = [m.velocity[m.name.index(j)] for j in ARM]
+                if np.allclose(q, arm, atol=2e-3) and np.allclose(qd, 0.0, atol=1e-2):
+                    return m.header.stamp
+            return None
+        return rostest_helpers.wait_for(found, 'a joint state of the arm at rest at %s' % arm)
+
     def reading(self, recorder):
         """The first wrench computed after now (one sensor period of margin). On physics, the first measured
-        after now on the cell's clock: on a busy machine the node publishes samples of the moments before late."""
+        after now on the cell's clock, and after the arm has settled: on a busy machine the node publishes
+        samples of the moments before late. A reading stamped then also means the sensor's node has reached
+        that time, so that a SET_ZERO sent after it is taken there or later."""
         if PHYSICS:
-            return wrench_arrays(recorder.stamped_after(rospy.Time.now()))
+            return wrench_arrays(recorder.stamped_after(max(rospy.Time.now(), self.settled)))
         return wrench_arrays(recorder.next_after(time.monotonic() + 0.05))
 
     def warnings_from(self, node, text):
