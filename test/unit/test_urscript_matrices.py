@@ -6,33 +6,16 @@ hand where the manual gives only the expression, and a least-squares fit
 through points on a known line, as UR's article on linear algebra in
 URScript solves one.
 """
-import os
-
 import pytest
 
-from ur3_ft_gripper_testing.model import PACKAGE_DIR
-from ur3_ft_gripper_description.urscript import CompileError, Run, RuntimeFault, compile_script, to_str
+from ur3_ft_gripper_description.urscript import CompileError, RuntimeFault, compile_script
 
-DT = 0.002
-
-
-class LogRobot(object):
-    """The robot side: textmsg only, its lines kept."""
-
-    def __init__(self):
-        self.log = []
-
-    def call(self, name, args, kwargs):
-        self.log.append(''.join(to_str(a) for a in args))
+from test_urscript_language import run_to_end, script
 
 
 def run(text):
-    robot = LogRobot()
-    program = Run(compile_script(text, {'textmsg': False}), robot)
-    for _ in range(1000):
-        if program.finished:
-            break
-        program.step(DT)
+    """The finished run of `text` and the lines it wrote with textmsg."""
+    program, robot, _ = run_to_end(text, max_cycles=1000)
     assert program.finished
     return program, robot.log
 
@@ -131,8 +114,7 @@ def test_a_pose_literal_of_other_than_six_is_still_refused_when_the_program_comp
 
 
 def test_the_corpus_program_fits_its_line_and_turns_its_point():
-    with open(os.path.join(PACKAGE_DIR, 'test', 'data', 'urscript', 'matrices.script')) as f:
-        program, log = run(f.read())
+    program, log = run(script('matrices.script'))
     assert program.error is None
     # y = 2 x + 1; a quarter turn about z takes (0.2, 0, 0.3) to (0, 0.2, 0.3), then 0.1 m (0.15 m) along x.
     assert log == ['intercept and slope [1, 2]', 'point [0.1, 0.2, 0.3, 1] moved [0.15, 0.2, 0.3, 1]',

@@ -107,9 +107,7 @@ class ScriptRpc(object):
                                                                            fault.faultString)
             except xmlrpc.client.ProtocolError as exc:
                 outcome['error'] = '%s: the server answered HTTP %s %s' % (where, exc.errcode, exc.errmsg)
-            except OverflowError as exc:
-                outcome['error'] = '%s: %s' % (where, exc)
-            except (OSError, xmlrpc.client.Error, ValueError) as exc:
+            except (OSError, OverflowError, ValueError, xmlrpc.client.Error) as exc:
                 outcome['error'] = '%s: %s' % (where, exc)
 
         worker = threading.Thread(target=remote, name='rpc ' + method, daemon=True)
