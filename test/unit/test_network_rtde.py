@@ -11,7 +11,7 @@ import socket
 import numpy as np
 import pytest
 
-from ur3_ft_gripper_description.devices.network import rtde
+from ur3_ft_gripper_description.devices.network import listen, rtde
 from ur3_ft_gripper_description.devices.ur_arm import rtde_fields
 from ur3_ft_gripper_description.devices.ur_arm.software import TABLE_KEYS
 from ur3_ft_gripper_description.number_text import number_list
@@ -130,6 +130,35 @@ def test_a_program_reads_the_registers_a_client_writes_and_the_client_reads_what
     assert values['output_bit_register_65'] is False
     writer.close()
     reader.close()
+
+
+def test_a_client_that_closed_its_connection_leaves_its_inputs_to_the_next_before_its_session_ends(cell):
+    # The closed client's session is held here, not served by a thread, so that it cannot have ended: only
+    # its connection tells that no more comes from it.
+    names = ['input_int_register_0', 'input_double_register_0']
+    with socket.create_server((listen.LOOPBACK, 0)) as server:
+        client = socket.create_connection(server.getsockname())
+        served, _ = server.accept()
+    closed = cell.faces.rtde.session(lambda data: None, 'a client', lambda: listen.peer_hung_up(served))
+    try:
+        assert cell.faces.rtde.claim_inputs(closed, names)[1]
+        follower = cell.client()
+        assert follower.setup_inputs(names).types == ['IN_USE', 'IN_USE']  # while its client is there
+        client.sendall(rtde.packet(rtde.PAUSE))  # as ur_rtde disconnects: unread when it closes
+        client.close()
+        assert follower.setup_inputs(names).types == ['INT32', 'DOUBLE']
+        follower.close()
+    finally:
+        served.close()
+
+
+def test_clients_that_take_the_same_inputs_one_after_the_other_each_get_them(cell):
+    names = ['speed_slider_mask', 'speed_slider_fraction', 'input_int_register_0']
+    for _ in range(20):
+        client = cell.client()
+        assert client.setup_inputs(names).ok
+        assert client.pause()
+        client.close()
 
 
 def test_the_speed_slider_and_the_digital_outputs_follow_their_masks(cell):

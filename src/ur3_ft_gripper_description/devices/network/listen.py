@@ -10,6 +10,7 @@ address.
 import errno
 import ipaddress
 import queue
+import select
 import socket
 import socketserver
 import sys
@@ -33,6 +34,22 @@ def checked_address(text):
 
 def is_loopback(address):
     return ipaddress.IPv4Address(address).is_loopback
+
+
+# The peer closed (or shut down its sending side): Linux says so at once, even while data it sent before
+# still waits to be read; elsewhere only a reset or a full close shows.
+HUNG_UP = getattr(select, 'POLLRDHUP', 0) | select.POLLHUP | select.POLLERR
+
+
+def peer_hung_up(sock):
+    """Whether the client at the other end of `sock` has closed its connection, without reading from it: a
+    session thread that has not run since the close has not yet ended the session it serves."""
+    poller = select.poll()
+    try:
+        poller.register(sock, HUNG_UP)
+    except ValueError:
+        return True  # the socket is closed here already
+    return any(events & HUNG_UP for _, events in poller.poll(0))
 
 
 class ThreadingServer(socketserver.ThreadingMixIn, socketserver.TCPServer):

@@ -130,23 +130,33 @@ class Exchange(object):
         self.sessions = []
         self.owners = {}  # input field name -> the Session that set it up
 
-    def session(self, send, client):
-        session = Session(self, send, client)
+    def session(self, send, client, hung_up=lambda: False):
+        """A client's session; `hung_up()` tells whether the client has closed its connection."""
+        session = Session(self, send, client, hung_up)
         with self.lock:
             self.sessions.append(session)
         return session
 
     def close(self, session):
         with self.lock:
-            if session in self.sessions:
-                self.sessions.remove(session)
-            for name in [n for n, owner in self.owners.items() if owner is session]:
-                del self.owners[name]
+            self._release(session)
+
+    def _release(self, session):
+        if session in self.sessions:
+            self.sessions.remove(session)
+        for name in [n for n, owner in self.owners.items() if owner is session]:
+            del self.owners[name]
 
     def claim_inputs(self, session, names):
         """The types of `names` for an input recipe of `session`, each NOT_FOUND, IN_USE (another client
         writes it) or its type; whether all are taken for `session`."""
         with self.lock:
+            # A client that closed its connection writes nothing more, though its session's thread may not
+            # have run since: its inputs go to the next client at once (ur_rtde's IO interface, closed, then
+            # its control interface asks for the same registers).
+            for owner in {self.owners[name] for name in names if name in self.owners} - {session}:
+                if owner.hung_up():
+                    self._release(owner)
             types = [self.fields['inputs'].get(name, NOT_FOUND) for name in names]
             types = [IN_USE if kind != NOT_FOUND and self.owners.get(name, session) is not session else kind
                      for name, kind in zip(names, types)]
@@ -170,8 +180,8 @@ class Exchange(object):
 class Session(object):
     """One client's protocol state; `receive(kind, payload)` answers, and data goes out, through `send(bytes)`."""
 
-    def __init__(self, exchange, send, client):
-        self.exchange, self.send, self.client = exchange, send, client
+    def __init__(self, exchange, send, client, hung_up):
+        self.exchange, self.send, self.client, self.hung_up = exchange, send, client, hung_up
         self.protocol = 1
         self.outputs = None          # Recipe
         self.inputs = {}             # recipe id -> Recipe
@@ -278,7 +288,7 @@ def serve(address, exchange, log, port=PORT):
             client = '%s:%d' % self.client_address[:2]
             outbox = listen.Outbox(self.request, SEND_QUEUE, 'rtde: %s reads slower than the frequency it asked for: '
                                    'its connection is closed' % client, log)
-            session = exchange.session(outbox.put, client)
+            session = exchange.session(outbox.put, client, lambda: listen.peer_hung_up(self.request))
             try:
                 self._read(session, client)
             finally:
